@@ -1,0 +1,24 @@
+// Edge pipeline parameters: the model file, the alignment window, the IB
+// latent size, and which localization methods run (paper Secs. IV-V).
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace uavsim::pipeline {
+
+struct PipelineConfig {
+  std::string model = "default";  // "default": the model shipped for scenarios/default.json
+  double window_s = 0.2;          // paper: alignment window t^w = 0.2 s
+  int latent_dim = 16;            // paper: z in {4, 8, 16, 32, 64}
+  double late_allowance_s = 0.0;  // grace after a window's deadline before a packet counts late
+  std::vector<std::string> methods{"uavloc", "ekf"};
+};
+
+// The method names a scenario may list.
+const std::vector<std::string>& KnownMethods();
+
+template <class V>
+void Visit(V& v, PipelineConfig& c);
+
+}  // namespace uavsim::pipeline

@@ -1,0 +1,45 @@
+// A run's output directory, written all-or-nothing. Files go into a hidden
+// staging directory beside the final one, each written to a temporary name
+// and renamed; Commit() renames the staging directory to its final name.
+// A run that throws or is killed never leaves its final directory behind
+// half-written (a killed run leaves only the hidden ".NAME.partial-PID").
+#pragma once
+
+#include <string>
+
+#include "sim/core/json_io.h"
+
+namespace uavsim::results {
+
+// Writes `content` to `path` atomically (temp file in the same folder, fsync,
+// rename). Throws std::runtime_error naming the path on failure.
+void WriteFileAtomic(const std::string& path, const std::string& content);
+
+class RunDirectory {
+ public:
+  // Throws core::UsageError if `final_dir` exists and `force` is false.
+  RunDirectory(std::string final_dir, bool force);
+  ~RunDirectory();  // removes the staging directory unless committed
+  RunDirectory(const RunDirectory&) = delete;
+  RunDirectory& operator=(const RunDirectory&) = delete;
+
+  // `relative_path` may contain folders; they are created.
+  void WriteText(const std::string& relative_path, const std::string& content);
+  void WriteJson(const std::string& relative_path, const core::Json& json);
+  // Where a writer that streams its own file should put `relative_path`
+  // (inside staging; folders created).
+  std::string StagingPath(const std::string& relative_path);
+
+  // Moves staging to the final name (replacing an old run if `force`).
+  void Commit();
+
+  const std::string& final_dir() const { return final_dir_; }
+
+ private:
+  std::string final_dir_;
+  std::string staging_dir_;
+  bool force_;
+  bool committed_ = false;
+};
+
+}  // namespace uavsim::results

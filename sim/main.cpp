@@ -1,0 +1,279 @@
+// The uavsim command line (DESIGN.md "Command line"). Errors from bad input
+// are caught here once: one line on stderr, exit code 2.
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <functional>
+#include <iostream>
+#include <map>
+#include <optional>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "sim/bench_events.h"
+#include "sim/core/error.h"
+#include "sim/run.h"
+#include "sim/scenario.h"
+#include "sim/version.h"
+
+namespace {
+
+using uavsim::core::UsageError;
+
+constexpr int kExitOk = 0;
+constexpr int kExitFailure = 1;
+constexpr int kExitBadInput = 2;
+constexpr int kExitInterrupted = 130;
+
+const char* kMainHelp =
+    "uavsim: discrete-event network and sensing simulator for edge-assisted multimodal UAV localization\n"
+    "\n"
+    "usage: uavsim COMMAND [OPTIONS]\n"
+    "\n"
+    "commands:\n"
+    "  validate SCENARIO.json     check a scenario; exit 0, or exit 2 with FILE: /json/pointer: message\n"
+    "  run SCENARIO.json          run a scenario and write its run directory\n"
+    "  sweep SPEC.json            run a grid of scenarios (packet loss x weather x seeds)\n"
+    "  train SCENARIO.json        train the UAVLoc model by simulation\n"
+    "  bench [raycast|events|pipeline|all]   measure the hot paths\n"
+    "\n"
+    "options: --help (also after a command), --version, --quiet (every command)\n"
+    "exit codes: 0 ok, 1 failure while running, 2 bad input or usage, 130 interrupted\n";
+
+const char* kValidateHelp =
+    "usage: uavsim validate SCENARIO.json [--set /json/pointer=value]... [--resolved] [--quiet]\n"
+    "\n"
+    "Checks SCENARIO.json strictly (unknown keys, types, ranges, references, files,\n"
+    "resource limits). Exit 0 if valid, else exit 2 with one line on stderr:\n"
+    "  FILE: /json/pointer: expected ..., got ...\n"
+    "\n"
+    "  --set P=V     override the value at JSON pointer P (V is JSON, or a bare string)\n"
+    "  --resolved    print the scenario with every default filled, as JSON, on stdout\n"
+    "  --quiet       print nothing on success\n";
+
+const char* kRunHelp =
+    "usage: uavsim run SCENARIO.json [--out DIR] [--seed N] [--duration S] [--record camera,lidar,radar]\n"
+    "                               [--set /json/pointer=value]... [--force] [--quiet]\n"
+    "\n"
+    "Runs the scenario and writes DIR (default runs/NAME-sSEED): manifest.json, truth.csv,\n"
+    "metrics.json and, as the models land, estimates.csv, rate_snr.csv and recorded frames.\n"
+    "The directory appears only when the run is complete.\n"
+    "\n"
+    "  --out DIR       run directory (refused if it exists, unless --force)\n"
+    "  --seed N        override the scenario's seed (same as --set /seed=N)\n"
+    "  --duration S    override duration_s (same as --set /duration_s=S)\n"
+    "  --record LIST   record raw frames of these modalities under DIR/frames/\n"
+    "  --set P=V       override the value at JSON pointer P\n"
+    "  --force         replace DIR if it exists\n"
+    "  --quiet         no progress or summary output\n";
+
+const char* kSweepHelp =
+    "usage: uavsim sweep SPEC.json [--out DIR] [--jobs N] [--shard I/N] [--quiet]\n"
+    "       uavsim sweep merge DIR\n"
+    "\n"
+    "Runs the Cartesian grid of scenario variations in SPEC.json (packet loss, weather,\n"
+    "seeds), resumably, in parallel or under mpirun, and aggregates RMSE and rate curves.\n";
+
+const char* kTrainHelp =
+    "usage: uavsim train SCENARIO.json [--out MODEL] [--quick] [--quiet]\n"
+    "\n"
+    "Generates training data by simulation and trains the UAVLoc model (IB-CC encoders,\n"
+    "then TE-Align, MADW, MICA and Mamba) with LibTorch on the CPU.\n";
+
+const char* kBenchHelp =
+    "usage: uavsim bench [raycast|events|pipeline|all] [--quiet]\n"
+    "\n"
+    "  events     the event core: hold model (pop earliest, schedule one at a random delay)\n"
+    "             with 1e3..1e6 pending events; events per second\n"
+    "  raycast    Embree throughput and each sensor's rays per second\n"
+    "  pipeline   node encoders and edge inference\n"
+    "  all        everything available (default)\n";
+
+// Flags of one command: name -> takes a value.
+struct ParsedArgs {
+  std::vector<std::string> positional;
+  std::map<std::string, std::vector<std::string>> values;
+  std::set<std::string> flags;
+  bool Has(const std::string& f) const { return flags.count(f) || values.count(f); }
+  std::optional<std::string> Value(const std::string& f) const {
+    auto it = values.find(f);
+    if (it == values.end()) return std::nullopt;
+    return it->second.back();
+  }
+};
+
+ParsedArgs Parse(const std::string& cmd, int argc, char** argv, int first,
+                 const std::set<std::string>& value_options, const std::set<std::string>& flag_options) {
+  ParsedArgs a;
+  for (int i = first; i < argc; ++i) {
+    std::string arg = argv[i];
+    if (arg.size() > 2 && arg.compare(0, 2, "--") == 0) {
+      std::string name = arg, value;
+      bool has_inline = false;
+      if (auto eq = arg.find('='); eq != std::string::npos) {
+        name = arg.substr(0, eq);
+        value = arg.substr(eq + 1);
+        has_inline = true;
+      }
+      if (value_options.count(name)) {
+        if (!has_inline) {
+          if (i + 1 >= argc) throw UsageError("uavsim " + cmd + ": " + name + " needs a value");
+          value = argv[++i];
+        }
+        a.values[name].push_back(value);
+      } else if (flag_options.count(name) && !has_inline) {
+        a.flags.insert(name);
+      } else {
+        throw UsageError("uavsim " + cmd + ": unknown option '" + arg + "' (see uavsim " + cmd + " --help)");
+      }
+    } else {
+      a.positional.push_back(arg);
+    }
+  }
+  return a;
+}
+
+std::vector<std::string> Overrides(const ParsedArgs& a) {
+  auto it = a.values.find("--set");
+  return it == a.values.end() ? std::vector<std::string>{} : it->second;
+}
+
+const std::string& OneScenario(const std::string& cmd, const ParsedArgs& a) {
+  if (a.positional.size() != 1)
+    throw UsageError("uavsim " + cmd + ": expected one scenario file (see uavsim " + cmd + " --help)");
+  return a.positional[0];
+}
+
+int Validate(int argc, char** argv) {
+  const ParsedArgs a = Parse("validate", argc, argv, 2, {"--set"}, {"--quiet", "--resolved", "--help"});
+  if (a.Has("--help")) return std::cout << kValidateHelp, kExitOk;
+  const std::string& file = OneScenario("validate", a);
+  const uavsim::sim::Scenario s = uavsim::sim::LoadScenario(file, Overrides(a));
+  if (a.Has("--resolved")) std::cout << uavsim::sim::ResolvedJson(s).dump(2) << "\n";
+  if (!a.Has("--quiet") && !a.Has("--resolved")) {
+    const auto e = uavsim::sim::EstimateResources(s);
+    std::printf("%s: ok (%zu UAV%s, %zu node%s, %g s simulated, %.3g rays per simulated second)\n", file.c_str(),
+                s.uavs.size(), s.uavs.size() == 1 ? "" : "s", s.nodes.size(), s.nodes.size() == 1 ? "" : "s",
+                s.duration_s, e.rays_per_s);
+  }
+  return kExitOk;
+}
+
+int Run(int argc, char** argv) {
+  const ParsedArgs a = Parse("run", argc, argv, 2, {"--out", "--seed", "--duration", "--record", "--set"},
+                             {"--quiet", "--force", "--help"});
+  if (a.Has("--help")) return std::cout << kRunHelp, kExitOk;
+  const std::string& file = OneScenario("run", a);
+  std::vector<std::string> overrides = Overrides(a);
+  if (auto seed = a.Value("--seed")) {
+    if (seed->empty() || seed->find_first_not_of("0123456789") != std::string::npos || seed->size() > 19)
+      throw UsageError("uavsim run: --seed expects a non-negative integer, got '" + *seed + "'");
+    overrides.push_back("/seed=" + *seed);
+  }
+  if (auto d = a.Value("--duration")) {
+    char* end = nullptr;
+    const double v = std::strtod(d->c_str(), &end);
+    if (d->empty() || *end != '\0' || !(v > 0))
+      throw UsageError("uavsim run: --duration expects a positive number of seconds, got '" + *d + "'");
+    overrides.push_back("/duration_s=" + *d);
+  }
+  uavsim::sim::RunOptions o;
+  o.quiet = a.Has("--quiet");
+  o.force = a.Has("--force");
+  o.scenario_file = file;
+  if (auto r = a.Value("--record")) {
+    std::stringstream ss(*r);
+    std::string m;
+    while (std::getline(ss, m, ',')) {
+      if (m != "camera" && m != "lidar" && m != "radar")
+        throw UsageError("uavsim run: --record expects a list of camera, lidar, radar; got '" + m + "'");
+      o.record.push_back(m);
+    }
+  }
+  const uavsim::sim::Scenario s = uavsim::sim::LoadScenario(file, overrides);
+  o.out_dir = a.Value("--out").value_or("runs/" + s.name + "-s" + std::to_string(s.seed));
+  const auto summary = uavsim::sim::RunScenario(s, o);
+  if (!o.quiet) {
+    std::printf("%s: %g s simulated in %.3f s (%.3gx real time); truth.csv %zu rows; frames", o.out_dir.c_str(),
+                summary.sim_s, summary.wall_s, summary.wall_s > 0 ? summary.sim_s / summary.wall_s : 0.0,
+                summary.truth_rows);
+    for (const auto& [m, n] : summary.frames) std::printf(" %s %llu", m.c_str(), static_cast<unsigned long long>(n));
+    std::printf("\n");
+  }
+  return kExitOk;
+}
+
+int NotYet(const std::string& cmd, const char* help, const char* issue, int argc, char** argv) {
+  for (int i = 2; i < argc; ++i)
+    if (std::string(argv[i]) == "--help") return std::cout << help, kExitOk;
+  std::cerr << "uavsim " << cmd << ": not available yet (it arrives with the issue \"" << issue << "\")\n";
+  return kExitBadInput;
+}
+
+int Bench(int argc, char** argv) {
+  const ParsedArgs a = Parse("bench", argc, argv, 2, {}, {"--quiet", "--help"});
+  if (a.Has("--help")) return std::cout << kBenchHelp, kExitOk;
+  if (a.positional.size() > 1) throw UsageError("uavsim bench: expected at most one target (see uavsim bench --help)");
+  const std::string what = a.positional.empty() ? "all" : a.positional[0];
+  if (what == "events" || what == "all") {
+    const int rc = uavsim::sim::BenchEvents(a.Has("--quiet"), std::cout);
+    if (what == "events" || rc != 0) return rc;
+    std::cout << "raycast: not available yet (arrives with the Embree world and sensors)\n"
+              << "pipeline: not available yet (arrives with the UAVLoc pipeline)\n";
+    return kExitOk;
+  }
+  if (what == "raycast" || what == "pipeline") {
+    std::cerr << "uavsim bench " << what << ": not available yet\n";
+    return kExitBadInput;
+  }
+  throw UsageError("uavsim bench: unknown target '" + what + "' (raycast, events, pipeline or all)");
+}
+
+int Main(int argc, char** argv) {
+  if (argc < 2) {
+    std::cerr << kMainHelp;
+    return kExitBadInput;
+  }
+  const std::string cmd = argv[1];
+  if (cmd == "--help" || cmd == "-h" || cmd == "help") return std::cout << kMainHelp, kExitOk;
+  if (cmd == "--version") {
+    std::cout << "uavsim " << uavsim::sim::Version();
+    if (*uavsim::sim::GitHash()) std::cout << " (" << uavsim::sim::GitHash() << ")";
+    std::cout << "\n";
+    return kExitOk;
+  }
+  if (cmd == "validate") return Validate(argc, argv);
+  if (cmd == "run") return Run(argc, argv);
+  if (cmd == "bench") return Bench(argc, argv);
+  if (cmd == "sweep") return NotYet(cmd, kSweepHelp, "Sweeps and curves", argc, argv);
+  if (cmd == "train") return NotYet(cmd, kTrainHelp, "The UAVLoc pipeline in the loop", argc, argv);
+  throw UsageError("uavsim: unknown command '" + cmd + "' (see uavsim --help)");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    uavsim::sim::InstallInterruptHandlers();
+    return Main(argc, argv);
+  } catch (const uavsim::core::ConfigError& e) {
+    std::cerr << e.what() << "\n";
+    return kExitBadInput;
+  } catch (const UsageError& e) {
+    std::cerr << e.what() << "\n";
+    return kExitBadInput;
+  } catch (const uavsim::sim::Interrupted&) {
+    std::cerr << "uavsim: interrupted; nothing was written under the final name\n";
+    return kExitInterrupted;
+  } catch (const std::bad_alloc&) {
+    std::cerr << "uavsim: out of memory\n";
+    return kExitFailure;
+  } catch (const std::exception& e) {
+    std::cerr << "uavsim: " << e.what() << "\n";
+    return kExitFailure;
+  }
+}

@@ -1,0 +1,45 @@
+// One run of a scenario: builds the world from the scenario, drives it on the
+// event core for duration_s of simulated time, and writes the run directory
+// (DESIGN.md: manifest.json, truth.csv, metrics.json, ...) all-or-nothing.
+#pragma once
+
+#include <iosfwd>
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "sim/core/json_io.h"
+#include "sim/scenario.h"
+
+namespace uavsim::sim {
+
+struct RunOptions {
+  std::string out_dir;               // final run directory
+  bool force = false;                // replace an existing out_dir
+  bool quiet = false;                // no progress, no summary
+  std::vector<std::string> record;   // modalities to record: camera, lidar, radar
+  std::string scenario_file;         // for the manifest
+};
+
+struct RunSummary {
+  double sim_s = 0.0;
+  double wall_s = 0.0;
+  std::size_t truth_rows = 0;
+  std::map<std::string, std::uint64_t> frames;  // per modality
+};
+
+// Throws core::UsageError (exists, not forced), std::runtime_error (I/O) or
+// Interrupted (SIGINT/SIGTERM during the run); the run directory then does not
+// exist under its final name.
+RunSummary RunScenario(const Scenario& scenario, const RunOptions& options);
+
+// Raised when a termination signal arrived during a run.
+struct Interrupted : std::runtime_error {
+  Interrupted() : std::runtime_error("interrupted") {}
+};
+
+// Installs SIGINT/SIGTERM handlers that ask a running simulation to stop.
+void InstallInterruptHandlers();
+
+}  // namespace uavsim::sim

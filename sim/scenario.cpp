@@ -1,0 +1,276 @@
+#include "sim/scenario.h"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <set>
+
+namespace uavsim::sim {
+
+using core::ConfigError;
+using core::Json;
+using core::Rule;
+
+namespace {
+
+bool IsValidId(const std::string& id) {
+  if (id.empty() || id.size() > 64) return false;
+  for (char ch : id)
+    if (!(std::isalnum(static_cast<unsigned char>(ch)) || ch == '_' || ch == '-')) return false;
+  return true;
+}
+
+// Ids name RNG streams and, later, files: keep them to a safe alphabet.
+template <class V>
+void CheckId(V& v, const char* key, const std::string& id) {
+  const std::string rule = "expected an id of 1 to 64 letters, digits, '_' or '-'";
+  if (!v.Has(key)) v.Check(!id.empty(), key, "missing required key \"" + std::string(key) + "\": " + rule);
+  v.Check(IsValidId(id), key, rule + ", got " + core::DescribeValue(Json(id)));
+}
+
+std::string Sci(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", x);
+  return buf;
+}
+
+}  // namespace
+
+std::vector<NodeConfig> Scenario::DefaultNodes() {
+  // Street intersections of the default 3 x 3 grid city sit at (+-30, +-30).
+  NodeConfig cam;
+  cam.id = "cam1";
+  cam.sensor.type = sensors::SensorType::kFisheyeStereo;
+  cam.sensor.fisheye.pose.position_m = {-30.0, -30.0, 1.5};
+  cam.sensor.fisheye.pose.rpy_deg = {0.0, -50.0, 45.0};
+  NodeConfig lidar;
+  lidar.id = "lidar1";
+  lidar.sensor.type = sensors::SensorType::kLidar;
+  lidar.sensor.lidar.pose.position_m = {30.0, -30.0, 1.5};
+  lidar.sensor.lidar.pose.rpy_deg = {0.0, 0.0, 135.0};
+  NodeConfig radar;
+  radar.id = "radar1";
+  radar.sensor.type = sensors::SensorType::kFmcwRadar;
+  radar.sensor.radar.pose.position_m = {-30.0, 30.0, 1.5};
+  radar.sensor.radar.pose.rpy_deg = {0.0, -30.0, -45.0};
+  return {cam, lidar, radar};
+}
+
+template <class V>
+void Visit(V& v, UavConfig& c) {
+  v("id", c.id);
+  CheckId(v, "id", c.id);
+  v("size_m", c.size_m, Rule{0.01, 20.0, false, false});
+  v.Object("trajectory", c.trajectory);
+}
+UAVSIM_INSTANTIATE_VISIT(UavConfig);
+
+template <class V>
+void Visit(V& v, DistractorsConfig& c) {
+  v("birds", c.birds, Rule::Range(0, 1000));
+}
+UAVSIM_INSTANTIATE_VISIT(DistractorsConfig);
+
+template <class V>
+void Visit(V& v, NodeConfig& c) {
+  v("id", c.id);
+  CheckId(v, "id", c.id);
+  v.Object("sensor", c.sensor);
+  v("uplink", c.uplink);
+}
+UAVSIM_INSTANTIATE_VISIT(NodeConfig);
+
+template <class V>
+void Visit(V& v, SnrGridConfig& c) {
+  v("from", c.from, Rule::Range(-100.0, 100.0));
+  v("to", c.to, Rule::Range(-100.0, 100.0));
+  v("step", c.step, Rule::Range(0.01, 100.0));
+  v.Check(c.from <= c.to, "to", "to must be >= from (" + core::FormatNumber(c.from) + ")");
+  v.Check((c.to - c.from) / c.step <= 10000.0, "step", "the SNR grid would have more than 10000 points");
+}
+UAVSIM_INSTANTIATE_VISIT(SnrGridConfig);
+
+template <class V>
+void Visit(V& v, OutputsConfig& c) {
+  v.Object("snr_db", c.snr_db);
+  v("truth_rate_hz", c.truth_rate_hz, Rule::Positive(1000.0));
+}
+UAVSIM_INSTANTIATE_VISIT(OutputsConfig);
+
+template <class V>
+void Visit(V& v, Scenario& c) {
+  v("name", c.name);
+  CheckId(v, "name", c.name);
+  v("seed", c.seed);
+  v("duration_s", c.duration_s, Rule::Positive(86400.0));
+  v.Object("world", c.world);
+  v.Object("weather", c.weather);
+  v.Array("uavs", c.uavs, 1, 64);
+  v.Object("distractors", c.distractors);
+  v.Array("nodes", c.nodes, 0, 256);
+  v.Map("links", c.links);
+  v.Object("base_station", c.base_station);
+  v.Object("pipeline", c.pipeline);
+  v.Object("outputs", c.outputs);
+}
+UAVSIM_INSTANTIATE_VISIT(Scenario);
+
+ResourceEstimate EstimateResources(const Scenario& s) {
+  ResourceEstimate e;
+  double max_node_rays_per_s = -1.0;
+  for (std::size_t i = 0; i < s.nodes.size(); ++i) {
+    const auto& sensor = s.nodes[i].sensor;
+    const double rays_per_s = sensor.RaysPerFrame() * sensor.timing().rate_hz;
+    e.rays_per_s += rays_per_s;
+    if (rays_per_s > max_node_rays_per_s) max_node_rays_per_s = rays_per_s, e.max_rays_node = i;
+    if (sensor.RaysPerFrame() > e.max_frame_rays) e.max_frame_rays = sensor.RaysPerFrame(), e.max_frame_rays_node = i;
+    if (sensor.RawBytesPerFrame() > e.max_frame_bytes) e.max_frame_bytes = sensor.RawBytesPerFrame(), e.max_frame_node = i;
+  }
+  e.rays_total = e.rays_per_s * s.duration_s;
+  return e;
+}
+
+namespace {
+
+// A file a scenario refers to, relative to the scenario's folder.
+std::filesystem::path RequireFile(const std::string& file, const std::string& pointer, const std::string& base_dir,
+                                  const std::string& path) {
+  namespace fs = std::filesystem;
+  const fs::path p = (fs::path(base_dir) / path).lexically_normal();
+  std::error_code ec;
+  if (!fs::exists(p, ec)) throw ConfigError(file, pointer, "file not found: " + p.string());
+  if (!fs::is_regular_file(p, ec)) throw ConfigError(file, pointer, "not a regular file: " + p.string());
+  return p;
+}
+
+// Checks that involve more than one struct: unique ids, link references,
+// referenced files, and the resource guard.
+void CheckScenario(const Scenario& s, const std::string& file) {
+  std::set<std::string> ids;
+  for (std::size_t i = 0; i < s.uavs.size(); ++i)
+    if (!ids.insert(s.uavs[i].id).second)
+      throw ConfigError(file, "/uavs/" + std::to_string(i) + "/id", "duplicate UAV id \"" + s.uavs[i].id + "\"");
+  ids.clear();
+  for (std::size_t i = 0; i < s.nodes.size(); ++i) {
+    const NodeConfig& n = s.nodes[i];
+    const std::string at = "/nodes/" + std::to_string(i);
+    if (!ids.insert(n.id).second) throw ConfigError(file, at + "/id", "duplicate node id \"" + n.id + "\"");
+    if (!s.links.count(n.uplink)) {
+      std::string known;
+      for (const auto& [name, link] : s.links) known += (known.empty() ? "\"" : ", \"") + name + "\"";
+      throw ConfigError(file, at + "/uplink",
+                        "no link named \"" + n.uplink + "\" in /links (known: " + (known.empty() ? "none" : known) + ")");
+    }
+  }
+  for (const auto& [name, link] : s.links)
+    if (!IsValidId(name))
+      throw ConfigError(file, "/links/" + core::EscapePointerToken(name),
+                        "expected a link name of 1 to 64 letters, digits, '_' or '-'");
+  if (s.pipeline.model != "default") RequireFile(file, "/pipeline/model", s.base_dir, s.pipeline.model);
+  if (s.world.city.type == core::CityType::kMesh) {
+    namespace fs = std::filesystem;
+    const fs::path p = RequireFile(file, "/world/city/path", s.base_dir, s.world.city.path);
+    const std::string ext = p.extension().string();
+    if (ext != ".obj" && ext != ".OBJ" && ext != ".ply" && ext != ".PLY")
+      throw ConfigError(file, "/world/city/path", "expected an .obj or .ply file, got \"" + s.world.city.path + "\"");
+  }
+  const ResourceEstimate e = EstimateResources(s);
+  auto node_sensor = [](std::size_t i) { return "/nodes/" + std::to_string(i) + "/sensor"; };
+  if (e.max_frame_rays > kMaxRaysPerFrame)
+    throw ConfigError(file, node_sensor(e.max_frame_rays_node),
+                      "refused: one frame would cast " + Sci(e.max_frame_rays) + " rays; the limit is " +
+                          Sci(kMaxRaysPerFrame));
+  if (e.max_frame_bytes > kMaxFrameBytes)
+    throw ConfigError(file, node_sensor(e.max_frame_node),
+                      "refused: one raw frame would take " + Sci(e.max_frame_bytes) + " bytes; the limit is " +
+                          Sci(kMaxFrameBytes));
+  if (e.rays_per_s > kMaxRaysPerSimSecond)
+    throw ConfigError(file, node_sensor(e.max_rays_node),
+                      "refused: the sensors would cast " + Sci(e.rays_per_s) +
+                          " rays per simulated second (this one " +
+                          Sci(s.nodes[e.max_rays_node].sensor.RaysPerFrame() *
+                              s.nodes[e.max_rays_node].sensor.timing().rate_hz) +
+                          "); the limit is " + Sci(kMaxRaysPerSimSecond));
+  if (e.rays_total > kMaxRaysPerRun)
+    throw ConfigError(file, "/duration_s",
+                      "refused: the run would cast " + Sci(e.rays_total) + " rays (" + Sci(e.rays_per_s) +
+                          " per simulated second for " + Sci(s.duration_s) + " s); the limit is " + Sci(kMaxRaysPerRun));
+  const double truth_rows = s.outputs.truth_rate_hz * s.duration_s;
+  if (truth_rows > kMaxTruthRows)
+    throw ConfigError(file, "/outputs/truth_rate_hz",
+                      "refused: truth.csv would have " + Sci(truth_rows) + " rows (about " +
+                          Sci(truth_rows * 70.0) + " bytes); the limit is " + Sci(kMaxTruthRows) + " rows");
+}
+
+}  // namespace
+
+void ApplyOverride(Json& doc, const std::string& assignment) {
+  const auto eq = assignment.find('=');
+  if (assignment.empty() || assignment[0] != '/' || eq == std::string::npos)
+    throw ConfigError("--set", assignment, "expected /json/pointer=value");
+  const std::string pointer = assignment.substr(0, eq);
+  const std::string text = assignment.substr(eq + 1);
+  Json value;
+  try {
+    value = Json::parse(text);
+  } catch (const Json::exception&) {
+    value = text;  // a bare word such as orbit
+  }
+  if (!doc.is_object()) throw ConfigError("--set", pointer, "the scenario is not a JSON object");
+  Json* node = &doc;
+  std::string at;
+  std::size_t pos = 1;
+  while (true) {
+    const auto slash = pointer.find('/', pos);
+    std::string token = pointer.substr(pos, slash == std::string::npos ? std::string::npos : slash - pos);
+    for (std::size_t i = 0; (i = token.find('~', i)) != std::string::npos; ++i) {
+      if (i + 1 < token.size() && (token[i + 1] == '0' || token[i + 1] == '1'))
+        token.replace(i, 2, token[i + 1] == '0' ? "~" : "/");
+      else
+        throw ConfigError("--set", pointer, "invalid escape in JSON pointer");
+    }
+    const bool last = slash == std::string::npos;
+    at += "/" + core::EscapePointerToken(token);
+    if (node->is_array()) {
+      std::size_t idx = 0;
+      if (token.empty() || token.find_first_not_of("0123456789") != std::string::npos || token.size() > 6 ||
+          (idx = std::stoul(token)) >= node->size())
+        throw ConfigError("--set", at, "no such array element (the array has " + std::to_string(node->size()) +
+                                           " elements; the defaults of an array are not addressable, write it in the file)");
+      node = &(*node)[idx];
+    } else if (node->is_object()) {
+      if (last) {
+        (*node)[token] = value;
+        return;
+      }
+      if (!node->contains(token)) (*node)[token] = Json::object();
+      node = &(*node)[token];
+    } else {
+      throw ConfigError("--set", at, "cannot descend into " + core::DescribeValue(*node));
+    }
+    if (last) {
+      *node = value;
+      return;
+    }
+    pos = slash + 1;
+  }
+}
+
+Scenario ScenarioFromJson(const Json& doc, const std::string& file, const std::string& base_dir) {
+  Scenario s;
+  s.base_dir = base_dir;
+  core::FromJson(doc, file, "", s);
+  CheckScenario(s, file);
+  return s;
+}
+
+Scenario LoadScenario(const std::string& path, const std::vector<std::string>& overrides) {
+  Json doc = core::LoadJsonFile(path);
+  for (const auto& o : overrides) ApplyOverride(doc, o);
+  const std::string base = std::filesystem::path(path).parent_path().string();
+  return ScenarioFromJson(doc, path, base.empty() ? "." : base);
+}
+
+Json ResolvedJson(const Scenario& s) { return core::ToJson(s); }
+
+}  // namespace uavsim::sim

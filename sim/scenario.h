@@ -1,0 +1,122 @@
+// A scenario: every component's config struct, collected. Loading is strict
+// (DESIGN.md): defaults, then the file, then `--set /json/pointer=value`
+// overrides; unknown keys, wrong types, out-of-range values, dangling
+// references, missing files and absurd resource demands are ConfigErrors
+// naming the file and the JSON pointer.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "channel/base_station_config.h"
+#include "channel/link_config.h"
+#include "pipeline/pipeline_config.h"
+#include "sensors/sensor_config.h"
+#include "sim/core/json_io.h"
+#include "sim/core/trajectory.h"
+#include "sim/core/weather.h"
+#include "sim/core/world.h"
+
+namespace uavsim::sim {
+
+struct UavConfig {
+  std::string id = "target";
+  Eigen::Vector3d size_m{0.5, 0.5, 0.2};
+  core::TrajectoryConfig trajectory;
+};
+
+struct DistractorsConfig {
+  int birds = 0;
+};
+
+struct NodeConfig {
+  std::string id;
+  sensors::SensorConfig sensor;
+  std::string uplink = "default";
+};
+
+struct SnrGridConfig {
+  double from = -10.0;
+  double to = 30.0;
+  double step = 2.0;
+};
+
+struct OutputsConfig {
+  SnrGridConfig snr_db;
+  double truth_rate_hz = 20.0;  // rows per simulated second in truth.csv
+};
+
+struct Scenario {
+  std::string name = "default";
+  std::uint64_t seed = 1;
+  double duration_s = 60.0;
+  core::WorldConfig world;
+  core::WeatherConfig weather;
+  std::vector<UavConfig> uavs{UavConfig{}};  // uavs[0] is the target to localize
+  DistractorsConfig distractors;
+  std::vector<NodeConfig> nodes = DefaultNodes();
+  std::map<std::string, channel::LinkConfig> links{{"default", channel::LinkConfig{}}};
+  channel::BaseStationConfig base_station;
+  pipeline::PipelineConfig pipeline;
+  OutputsConfig outputs;
+
+  // Not part of the file: the folder relative paths are resolved against.
+  std::string base_dir = ".";
+
+  // A stereo fisheye camera, a 32-channel LiDAR and a 77 GHz radar at three
+  // street corners of the default city, looking up at the default orbit.
+  static std::vector<NodeConfig> DefaultNodes();
+};
+
+template <class V>
+void Visit(V& v, UavConfig& c);
+template <class V>
+void Visit(V& v, DistractorsConfig& c);
+template <class V>
+void Visit(V& v, NodeConfig& c);
+template <class V>
+void Visit(V& v, SnrGridConfig& c);
+template <class V>
+void Visit(V& v, OutputsConfig& c);
+template <class V>
+void Visit(V& v, Scenario& c);
+
+// What a scenario would cost, for the resource guard.
+struct ResourceEstimate {
+  double rays_per_s = 0.0;              // all sensors, per simulated second
+  double rays_total = 0.0;              // over the whole run
+  std::size_t max_rays_node = 0;        // the node casting the most rays per second
+  double max_frame_rays = 0.0;          // the most rays of any one frame
+  std::size_t max_frame_rays_node = 0;  // its node
+  double max_frame_bytes = 0.0;         // the largest raw frame of any sensor
+  std::size_t max_frame_node = 0;       // its node
+};
+ResourceEstimate EstimateResources(const Scenario& s);
+
+// Limits of the resource guard.
+constexpr double kMaxRaysPerFrame = 1e9;
+constexpr double kMaxRaysPerSimSecond = 2e9;
+constexpr double kMaxTruthRows = 1e7;
+constexpr double kMaxRaysPerRun = 2e12;
+constexpr double kMaxFrameBytes = 2.0 * (1ull << 30);
+
+// Applies one "--set /json/pointer=value" to a document. The value is parsed
+// as JSON when it is valid JSON, else taken as a string. Missing objects on
+// the way are created; array indices must exist. Throws ConfigError.
+void ApplyOverride(core::Json& doc, const std::string& assignment);
+
+// Loads `path`, applies the overrides, fills the struct and checks every rule
+// including cross-references, referenced files (relative to the scenario's
+// folder) and the resource guard. Throws ConfigError.
+Scenario LoadScenario(const std::string& path, const std::vector<std::string>& overrides = {});
+// The same from a document already in memory; `file` names it in messages and
+// `base_dir` resolves relative paths.
+Scenario ScenarioFromJson(const core::Json& doc, const std::string& file, const std::string& base_dir);
+
+// The resolved scenario: every key, defaults filled.
+core::Json ResolvedJson(const Scenario& s);
+
+}  // namespace uavsim::sim

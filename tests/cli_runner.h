@@ -1,0 +1,25 @@
+// Runs the uavsim binary built beside the tests and captures what it says.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace uavsim::testing {
+
+struct CliResult {
+  int exit_code = -1;
+  std::string out;
+  std::string err;
+};
+
+// Runs build/uavsim with `args` (no shell), in the working directory `cwd`
+// if non-empty.
+CliResult RunCli(const std::vector<std::string>& args, const std::string& cwd = "");
+
+// A fresh empty temporary folder, removed at the end of the test process.
+std::string TempDir(const std::string& tag);
+
+std::string ReadFile(const std::string& path);
+void WriteFile(const std::string& path, const std::string& content);
+
+}  // namespace uavsim::testing

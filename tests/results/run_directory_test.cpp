@@ -1,0 +1,64 @@
+#include "results/run_directory.h"
+
+#include <catch2/catch.hpp>
+#include <filesystem>
+
+#include "cli_runner.h"
+#include "results/csv.h"
+
+namespace fs = std::filesystem;
+using uavsim::results::RunDirectory;
+
+TEST_CASE("RunDirectory: nothing appears under the final name until Commit", "[results]") {
+  const std::string root = uavsim::testing::TempDir("rundir");
+  const std::string final_dir = root + "/run1";
+  {
+    RunDirectory dir(final_dir, false);
+    dir.WriteText("truth.csv", "t_s\n");
+    dir.WriteText("frames/lidar/000000.ply", "ply\n");
+    CHECK_FALSE(fs::exists(final_dir));
+    // Abandoned without Commit (a failed run): staging is removed too.
+  }
+  CHECK_FALSE(fs::exists(final_dir));
+  CHECK(fs::is_empty(root));
+
+  {
+    RunDirectory dir(final_dir, false);
+    dir.WriteText("truth.csv", "t_s\n1\n");
+    dir.Commit();
+  }
+  CHECK(uavsim::testing::ReadFile(final_dir + "/truth.csv") == "t_s\n1\n");
+  CHECK_THROWS_AS(RunDirectory(final_dir, false), uavsim::core::UsageError);
+
+  {
+    RunDirectory dir(final_dir, true);
+    dir.WriteText("metrics.json", "{}\n");
+    dir.Commit();
+  }
+  CHECK(fs::exists(final_dir + "/metrics.json"));
+  CHECK_FALSE(fs::exists(final_dir + "/truth.csv"));  // replaced whole, not merged
+  // Only the final folder remains: no temp files, no staging.
+  int entries = 0;
+  for (auto& e : fs::directory_iterator(root)) ++entries, (void)e;
+  CHECK(entries == 1);
+}
+
+TEST_CASE("WriteFileAtomic: replaces content and leaves no temp file", "[results]") {
+  const std::string root = uavsim::testing::TempDir("atomic");
+  uavsim::results::WriteFileAtomic(root + "/a.txt", "one");
+  uavsim::results::WriteFileAtomic(root + "/a.txt", "two");
+  CHECK(uavsim::testing::ReadFile(root + "/a.txt") == "two");
+  int entries = 0;
+  for (auto& e : fs::directory_iterator(root)) ++entries, (void)e;
+  CHECK(entries == 1);
+  CHECK_THROWS_WITH(uavsim::results::WriteFileAtomic(root + "/no/such/dir/a.txt", "x"),
+                    Catch::Contains("cannot create"));
+}
+
+TEST_CASE("CsvTable: fixed formatting without negative zero", "[results]") {
+  uavsim::results::CsvTable t({"a", "b"});
+  t.AddRow({uavsim::results::FormatFixed(-0.0000001, 3), uavsim::results::FormatFixed(2.5, 2)});
+  CHECK(t.str() == "a,b\n0.000,2.50\n");
+  CHECK(t.rows() == 1);
+  CHECK_THROWS(t.AddRow({"1"}));
+}

@@ -1,0 +1,186 @@
+// The command-line contract of DESIGN.md, exercised through the built binary.
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <catch2/catch.hpp>
+#include <chrono>
+#include <filesystem>
+#include <sstream>
+#include <thread>
+
+#include "cli_runner.h"
+#include "sim/core/json_io.h"
+
+namespace fs = std::filesystem;
+using uavsim::core::Json;
+using uavsim::testing::ReadFile;
+using uavsim::testing::RunCli;
+using uavsim::testing::TempDir;
+using uavsim::testing::WriteFile;
+
+namespace {
+const std::string kDefault = std::string(UAVSIM_SOURCE_DIR) + "/scenarios/default.json";
+
+std::size_t CountLines(const std::string& s) { return static_cast<std::size_t>(std::count(s.begin(), s.end(), '\n')); }
+
+// The run files with the wall-clock fields removed.
+Json WithoutWallClock(Json j) {
+  for (const char* k : {"wall_s", "realtime_factor", "started_utc"}) j.erase(k);
+  return j;
+}
+}  // namespace
+
+TEST_CASE("CLI: --version, --help and every subcommand's --help", "[sim]") {
+  auto v = RunCli({"--version"});
+  CHECK(v.exit_code == 0);
+  CHECK_THAT(v.out, Catch::StartsWith("uavsim 0.1.0"));
+  for (const char* cmd : {"validate", "run", "sweep", "train", "bench"}) {
+    INFO(cmd);
+    auto r = RunCli({cmd, "--help"});
+    CHECK(r.exit_code == 0);
+    CHECK_THAT(r.out, Catch::StartsWith(std::string("usage: uavsim ") + cmd));
+  }
+  CHECK(RunCli({"--help"}).exit_code == 0);
+  auto none = RunCli({});
+  CHECK(none.exit_code == 2);
+}
+
+TEST_CASE("CLI: usage errors exit 2 with one line", "[sim]") {
+  for (const auto& args : std::vector<std::vector<std::string>>{
+           {"frobnicate"}, {"run"}, {"run", kDefault, "--bogus"}, {"validate", kDefault, kDefault},
+           {"run", kDefault, "--seed", "-3"}, {"run", kDefault, "--duration", "abc"},
+           {"run", kDefault, "--record", "sonar"}, {"run", kDefault, "--out"}, {"bench", "nothing"}}) {
+    auto r = RunCli(args);
+    INFO(args.front() << " ... " << r.err);
+    CHECK(r.exit_code == 2);
+    CHECK(CountLines(r.err) == 1);
+  }
+}
+
+TEST_CASE("CLI: later issues' subcommands say they are not available yet", "[sim]") {
+  for (const char* cmd : {"sweep", "train"}) {
+    auto r = RunCli({cmd, kDefault});
+    CHECK(r.exit_code == 2);
+    CHECK_THAT(r.err, Catch::Contains("not available yet"));
+  }
+}
+
+TEST_CASE("CLI: validate accepts the default scenario and {} ", "[sim]") {
+  auto r = RunCli({"validate", kDefault});
+  CHECK(r.exit_code == 0);
+  CHECK_THAT(r.out, Catch::Contains("ok"));
+  const std::string dir = TempDir("validate");
+  WriteFile(dir + "/empty.json", "{}");
+  CHECK(RunCli({"validate", dir + "/empty.json", "--quiet"}).exit_code == 0);
+  auto resolved = RunCli({"validate", dir + "/empty.json", "--resolved"});
+  REQUIRE(resolved.exit_code == 0);
+  CHECK(Json::parse(resolved.out)["pipeline"]["window_s"] == 0.2);
+  auto set = RunCli({"validate", dir + "/empty.json", "--set", "/links/default/loss/p=2"});
+  CHECK(set.exit_code == 2);
+  CHECK(set.err == dir + "/empty.json: /links/default/loss/p: expected a number in [0, 1], got 2\n");
+  auto missing = RunCli({"validate", dir + "/nope.json"});
+  CHECK(missing.exit_code == 2);
+  CHECK(missing.err == dir + "/nope.json: cannot read file: No such file or directory\n");
+}
+
+TEST_CASE("CLI: run writes the run directory of DESIGN.md", "[sim]") {
+  const std::string out = TempDir("run") + "/r";
+  auto r = RunCli({"run", kDefault, "--out", out, "--quiet"});
+  REQUIRE(r.exit_code == 0);
+  CHECK(r.out.empty());
+  CHECK(r.err.empty());
+  for (const char* f : {"manifest.json", "truth.csv", "metrics.json"}) CHECK(fs::exists(out + "/" + f));
+
+  const std::string truth = ReadFile(out + "/truth.csv");
+  CHECK_THAT(truth, Catch::StartsWith("t_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps\n0.000000,"));
+  CHECK(CountLines(truth) == 1 + 60 * 20);  // header + 60 s at 20 Hz, end exclusive
+
+  const Json metrics = Json::parse(ReadFile(out + "/metrics.json"));
+  CHECK(metrics["sim_s"] == 60.0);
+  CHECK(metrics["wall_s"].get<double>() > 0.0);
+  CHECK(metrics["realtime_factor"].get<double>() > 0.0);
+  CHECK(metrics["rmse_m"].is_object());
+  // Frame timers at the paper's rates over 60 s.
+  CHECK(metrics["modalities"]["camera"]["frames"] == 1800);
+  CHECK(metrics["modalities"]["lidar"]["frames"] == 600);
+  CHECK(metrics["modalities"]["radar"]["frames"] == 900);
+
+  const Json manifest = Json::parse(ReadFile(out + "/manifest.json"));
+  CHECK(manifest["seed"] == 1);
+  CHECK(manifest["uavsim_version"] == "0.1.0");
+  CHECK(manifest["scenario"]["pipeline"]["methods"] == Json::array({"uavloc", "ekf"}));
+  CHECK(manifest["scenario"]["links"]["default"]["mtu_bytes"] == 1500);
+
+  // Refuses to overwrite; --force replaces.
+  auto again = RunCli({"run", kDefault, "--out", out, "--quiet"});
+  CHECK(again.exit_code == 2);
+  CHECK_THAT(again.err, Catch::Contains("already exists"));
+  CHECK(RunCli({"run", kDefault, "--out", out, "--quiet", "--force", "--duration", "2"}).exit_code == 0);
+  CHECK(CountLines(ReadFile(out + "/truth.csv")) == 1 + 2 * 20);
+}
+
+TEST_CASE("CLI: the same scenario and seed give byte-identical files; another seed differs", "[sim]") {
+  const std::string dir = TempDir("determinism");
+  // A random trajectory and clock jitter: everything that draws random numbers.
+  WriteFile(dir + "/s.json", R"({
+    "duration_s": 20,
+    "uavs": [{"id": "target", "trajectory": {"type": "random"}}],
+    "nodes": [{"id": "cam", "sensor": {"type": "fisheye_stereo", "clock_jitter_s": 0.001}},
+              {"id": "lid", "sensor": {"type": "lidar", "phase_s": 0.05, "clock_jitter_s": 0.002}}]
+  })");
+  auto run = [&](const std::string& name, const std::string& seed) {
+    auto r = RunCli({"run", dir + "/s.json", "--out", dir + "/" + name, "--seed", seed, "--quiet"});
+    REQUIRE(r.exit_code == 0);
+    return dir + "/" + name;
+  };
+  const std::string a = run("a", "7"), b = run("b", "7"), c = run("c", "8");
+  CHECK(ReadFile(a + "/truth.csv") == ReadFile(b + "/truth.csv"));
+  CHECK(WithoutWallClock(Json::parse(ReadFile(a + "/manifest.json"))) ==
+        WithoutWallClock(Json::parse(ReadFile(b + "/manifest.json"))));
+  CHECK(WithoutWallClock(Json::parse(ReadFile(a + "/metrics.json"))) ==
+        WithoutWallClock(Json::parse(ReadFile(b + "/metrics.json"))));
+  CHECK(ReadFile(a + "/truth.csv") != ReadFile(c + "/truth.csv"));
+}
+
+TEST_CASE("CLI: a killed run leaves nothing under its final name", "[sim]") {
+  const std::string dir = TempDir("killed");
+  // A long run with a cheap world: nothing but the truth timer at a high rate.
+  WriteFile(dir + "/long.json", R"({"duration_s": 86400, "nodes": [], "outputs": {"truth_rate_hz": 100}})");
+  for (int sig : {SIGKILL, SIGTERM}) {
+    const std::string out = dir + "/out" + std::to_string(sig);
+    const pid_t pid = fork();
+    if (pid == 0) {
+      const int devnull = open("/dev/null", O_WRONLY);
+      dup2(devnull, 1), dup2(devnull, 2);
+      execl(UAVSIM_CLI, UAVSIM_CLI, "run", (dir + "/long.json").c_str(), "--out", out.c_str(), "--quiet",
+            static_cast<char*>(nullptr));
+      _exit(127);
+    }
+    // Wait until the run is under way (its staging folder exists), then kill it.
+    const std::string staging_prefix = ".out" + std::to_string(sig) + ".partial-";
+    bool started = false;
+    for (int i = 0; i < 400 && !started; ++i) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(25));
+      for (auto& e : fs::directory_iterator(dir))
+        started = started || e.path().filename().string().rfind(staging_prefix, 0) == 0;
+    }
+    REQUIRE(started);
+    kill(pid, sig);
+    int status = 0;
+    waitpid(pid, &status, 0);
+    if (sig == SIGTERM) {
+      REQUIRE(WIFEXITED(status));
+      CHECK(WEXITSTATUS(status) == 130);
+    }
+    CHECK_FALSE(fs::exists(out));
+  }
+  // After SIGTERM the staging folder is cleaned up too; after SIGKILL only a
+  // hidden .partial folder can remain.
+  for (auto& e : fs::directory_iterator(dir)) {
+    const std::string name = e.path().filename().string();
+    INFO(name);
+    CHECK((name == "long.json" || name.rfind(".out" + std::to_string(SIGKILL) + ".partial-", 0) == 0));
+  }
+}

@@ -1,0 +1,158 @@
+// The malformed-scenario battery: every file in tests/malformed/ is wrong in
+// exactly one way, and expected.tsv says where `uavsim validate` must point
+// and what it must say (FILENAME<TAB>POINTER<TAB>SUBSTRING; POINTER is a JSON
+// pointer, "line L, column C" for syntax errors, or "-" for none).
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "tests/cli_runner.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using uavsim::testing::RunCli;
+using uavsim::testing::TempDir;
+
+struct Expectation {
+  std::string file;
+  std::string pointer;
+  std::string substring;
+};
+
+fs::path BatteryDir() { return fs::path(UAVSIM_SOURCE_DIR) / "tests" / "malformed"; }
+
+std::vector<std::string> SplitTabs(const std::string& line) {
+  std::vector<std::string> fields;
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t tab = line.find('\t', start);
+    fields.push_back(
+        line.substr(start, tab == std::string::npos ? std::string::npos : tab - start));
+    if (tab == std::string::npos) return fields;
+    start = tab + 1;
+  }
+}
+
+// Parsed once; a malformed row throws, naming its line.
+const std::vector<Expectation>& Battery() {
+  static const std::vector<Expectation> rows = [] {
+    const fs::path tsv = BatteryDir() / "expected.tsv";
+    std::ifstream in(tsv);
+    if (!in) throw std::runtime_error("cannot read " + tsv.string());
+    std::vector<Expectation> out;
+    std::string line;
+    int line_no = 0;
+    while (std::getline(in, line)) {
+      ++line_no;
+      if (!line.empty() && line.back() == '\r') line.pop_back();
+      if (line.empty() || line[0] == '#') continue;
+      const std::vector<std::string> f = SplitTabs(line);
+      if (f.size() != 3 || f[0].empty() || f[1].empty() || f[2].empty())
+        throw std::runtime_error("expected.tsv line " + std::to_string(line_no) +
+                                 ": expected FILENAME<TAB>POINTER<TAB>SUBSTRING, got: " + line);
+      out.push_back({f[0], f[1], f[2]});
+    }
+    return out;
+  }();
+  return rows;
+}
+
+std::set<std::string> JsonFilesInBattery() {
+  std::set<std::string> names;
+  for (const auto& entry : fs::directory_iterator(BatteryDir()))
+    if (entry.is_regular_file() && entry.path().extension() == ".json")
+      names.insert(entry.path().filename().string());
+  return names;
+}
+
+// Everything directly under `dir`, hidden entries included.
+std::vector<std::string> Entries(const std::string& dir) {
+  std::vector<std::string> names;
+  for (const auto& entry : fs::directory_iterator(dir))
+    names.push_back(entry.path().filename().string());
+  return names;
+}
+
+}  // namespace
+
+TEST_CASE("Malformed battery: expected.tsv and the folder list the same files", "[sim]") {
+  const std::vector<Expectation>& rows = Battery();
+  CHECK(rows.size() >= 40);
+
+  std::set<std::string> listed;
+  for (const Expectation& row : rows) {
+    INFO("row " << row.file);
+    CHECK(listed.insert(row.file).second);  // one row per file
+  }
+  const std::set<std::string> on_disk = JsonFilesInBattery();
+  for (const std::string& name : on_disk) {
+    INFO(name << " is in tests/malformed/ but has no row in expected.tsv");
+    CHECK(listed.count(name) == 1);
+  }
+  for (const std::string& name : listed) {
+    INFO(name << " has a row in expected.tsv but is not in tests/malformed/");
+    CHECK(on_disk.count(name) == 1);
+  }
+}
+
+TEST_CASE("Malformed battery: validate exits 2 with one line naming file, pointer and fault",
+          "[sim]") {
+  for (const Expectation& row : Battery()) {
+    DYNAMIC_SECTION(row.file) {
+      const std::string path = fs::absolute(BatteryDir() / row.file).lexically_normal().string();
+      const auto r = RunCli({"validate", path});
+      const std::string prefix =
+          path + ": " + (row.pointer == "-" ? std::string() : row.pointer + ": ");
+      INFO("file: " << row.file);
+      INFO("expected prefix: " << prefix);
+      INFO("expected substring: " << row.substring);
+      INFO("exit code: " << r.exit_code);
+      INFO("stderr: " << r.err);
+      INFO("stdout: " << r.out);
+      CHECK(r.exit_code == 2);
+      CHECK(r.out.empty());
+      // Exactly one line: ends with a newline and has no other.
+      REQUIRE(!r.err.empty());
+      CHECK(r.err.back() == '\n');
+      CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+      CHECK(r.err.compare(0, prefix.size(), prefix) == 0);
+      // The substring belongs to the message, after the location.
+      const std::string message =
+          r.err.size() > prefix.size() ? r.err.substr(prefix.size()) : std::string();
+      CHECK(message.find(row.substring) != std::string::npos);
+    }
+  }
+}
+
+TEST_CASE("Malformed battery: run refuses before writing anything", "[sim]") {
+  // One of each family: syntax, unknown key, cross-reference, resource guard.
+  const std::vector<std::string> files = {"syntax_truncated.json", "unknown_key_top_typo.json",
+                                          "duplicate_node_ids.json", "uplink_dangling.json",
+                                          "resource_camera_rays_per_second.json"};
+  for (const std::string& name : files) {
+    DYNAMIC_SECTION(name) {
+      const std::string path = fs::absolute(BatteryDir() / name).lexically_normal().string();
+      REQUIRE(fs::is_regular_file(path));
+      const std::string tmp = TempDir("malformed-run");
+      const std::string out = tmp + "/run";
+      const auto r = RunCli({"run", path, "--out", out, "--quiet"}, tmp);
+      INFO("stderr: " << r.err);
+      CHECK(r.exit_code == 2);
+      CHECK(r.err.compare(0, path.size() + 2, path + ": ") == 0);
+      CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+      CHECK_FALSE(fs::exists(out));
+      // No staging folder, temporary file or default runs/ folder either.
+      std::string left;
+      for (const std::string& e : Entries(tmp)) left += " " + e;
+      INFO("left behind beside --out:" << left);
+      CHECK(left.empty());
+    }
+  }
+}

@@ -1,0 +1,122 @@
+#include "sim/scenario.h"
+
+#include <catch2/catch.hpp>
+#include <filesystem>
+
+#include "cli_runner.h"
+
+using uavsim::core::ConfigError;
+using uavsim::core::Json;
+using uavsim::sim::ApplyOverride;
+using uavsim::sim::LoadScenario;
+using uavsim::sim::ResolvedJson;
+using uavsim::sim::Scenario;
+using uavsim::sim::ScenarioFromJson;
+
+namespace {
+std::string ErrorOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+const std::string kScenarios = std::string(UAVSIM_SOURCE_DIR) + "/scenarios";
+}  // namespace
+
+TEST_CASE("Scenario: {} is valid and is the default world", "[sim]") {
+  const Scenario s = ScenarioFromJson(Json::object(), "empty.json", ".");
+  CHECK(s.name == "default");
+  CHECK(s.duration_s == 60.0);
+  CHECK(s.nodes.size() == 3);
+  CHECK(s.uavs.size() == 1);
+  CHECK(s.links.count("default") == 1);
+  // The paper's rates (Sec. VI): camera 30 Hz, LiDAR 10 Hz, radar 15 Hz; window 0.2 s.
+  CHECK(s.nodes[0].sensor.timing().rate_hz == 30.0);
+  CHECK(s.nodes[1].sensor.timing().rate_hz == 10.0);
+  CHECK(s.nodes[2].sensor.timing().rate_hz == 15.0);
+  CHECK(s.pipeline.window_s == 0.2);
+}
+
+TEST_CASE("Scenario: scenarios/default.json spells out exactly the defaults", "[sim]") {
+  const Scenario from_file = LoadScenario(kScenarios + "/default.json");
+  const Scenario from_empty = ScenarioFromJson(Json::object(), "empty.json", ".");
+  CHECK(ResolvedJson(from_file).dump() == ResolvedJson(from_empty).dump());
+}
+
+TEST_CASE("Scenario: every shipped scenario validates", "[sim]") {
+  int count = 0;
+  for (const auto& e : std::filesystem::directory_iterator(kScenarios)) {
+    if (e.path().extension() != ".json") continue;
+    INFO(e.path().string());
+    CHECK_NOTHROW(LoadScenario(e.path().string()));
+    ++count;
+  }
+  CHECK(count >= 1);
+}
+
+TEST_CASE("Scenario: --set overrides address the document by JSON pointer", "[sim]") {
+  Json doc = Json::object();
+  ApplyOverride(doc, "/links/default/loss/p=0.2");
+  ApplyOverride(doc, "/weather/fog_visibility_m=150");
+  ApplyOverride(doc, "/uavs=[{\"id\":\"t\",\"trajectory\":{\"type\":\"random\"}}]");
+  ApplyOverride(doc, "/uavs/0/trajectory/max_speed_mps=4");
+  ApplyOverride(doc, "/name=bare-word");
+  const Scenario s = ScenarioFromJson(doc, "o.json", ".");
+  CHECK(s.links.at("default").loss.p == 0.2);
+  CHECK(s.weather.fog_visibility_m.value() == 150.0);
+  CHECK(s.uavs[0].trajectory.type == uavsim::core::TrajectoryType::kRandom);
+  CHECK(s.uavs[0].trajectory.max_speed_mps == 4.0);
+  CHECK(s.name == "bare-word");
+
+  CHECK_THAT(ErrorOf([&] { ApplyOverride(doc, "/uavs/3/id=x"); }),
+             Catch::StartsWith("--set: /uavs/3: no such array element"));
+  CHECK_THAT(ErrorOf([&] { ApplyOverride(doc, "/name/x=1"); }), Catch::StartsWith("--set: /name/x: cannot descend"));
+  CHECK_THAT(ErrorOf([&] { ApplyOverride(doc, "name=1"); }), Catch::Contains("expected /json/pointer=value"));
+  // A value set out of range is reported at its pointer like any other.
+  Json bad = Json::object();
+  ApplyOverride(bad, "/links/default/loss/p=1.5");
+  CHECK(ErrorOf([&] { ScenarioFromJson(bad, "b.json", "."); }) ==
+        "b.json: /links/default/loss/p: expected a number in [0, 1], got 1.5");
+}
+
+TEST_CASE("Scenario: links merge over the default map", "[sim]") {
+  const Scenario s = ScenarioFromJson(Json::parse(R"({"links": {"mmwave": {"carrier_ghz": 28}}})"), "l.json", ".");
+  CHECK(s.links.size() == 2);
+  CHECK(s.links.at("mmwave").carrier_ghz.value() == 28.0);
+  CHECK(s.links.at("default").bandwidth_mbps == 20.0);
+}
+
+TEST_CASE("Scenario: resource estimate is the closed-form ray count", "[sim]") {
+  const Scenario s = ScenarioFromJson(Json::object(), "e.json", ".");
+  const auto e = uavsim::sim::EstimateResources(s);
+  const auto& cam = s.nodes[0].sensor.fisheye;
+  const auto& lidar = s.nodes[1].sensor.lidar;
+  const auto& radar = s.nodes[2].sensor.radar;
+  const double camera = 2.0 * cam.width_px * cam.height_px * 30.0;
+  const double lidar_rays = lidar.channels * std::ceil(360.0 / lidar.azimuth_resolution_deg) * 10.0;
+  const double radar_rays = std::ceil(radar.fov_azimuth_deg / radar.ray_density_deg) *
+                            std::ceil(radar.fov_elevation_deg / radar.ray_density_deg) * 15.0;
+  CHECK(e.rays_per_s == Approx(camera + lidar_rays + radar_rays));
+  CHECK(e.rays_total == Approx((camera + lidar_rays + radar_rays) * 60.0));
+  // The radar cube: samples x chirps x virtual antennas x complex float32.
+  CHECK(s.nodes[2].sensor.RawBytesPerFrame() == 8.0 * 512 * 64 * 12);
+}
+
+TEST_CASE("Scenario: the resource guard refuses absurd work and says what it would cost", "[sim]") {
+  Json doc = Json::parse(R"({"nodes": [{"id": "c", "sensor": {"type": "fisheye_stereo", "width_px": 8192,
+      "height_px": 8192, "cx_px": 4096, "cy_px": 4096, "rate_hz": 1000}}]})");
+  const std::string e = ErrorOf([&] { ScenarioFromJson(doc, "g.json", "."); });
+  CHECK(e == "g.json: /nodes/0/sensor: refused: the sensors would cast 1.34e+11 rays per simulated second "
+             "(this one 1.34e+11); the limit is 2e+09");
+}
+
+TEST_CASE("Scenario: a mesh city's file is resolved against the scenario's folder", "[sim]") {
+  const std::string dir = uavsim::testing::TempDir("mesh");
+  uavsim::testing::WriteFile(dir + "/city.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  const Json doc = Json::parse(R"({"world": {"city": {"type": "mesh", "path": "city.obj"}}})");
+  CHECK_NOTHROW(ScenarioFromJson(doc, dir + "/s.json", dir));
+  CHECK_THAT(ErrorOf([&] { ScenarioFromJson(doc, "s.json", "/nonexistent"); }),
+             Catch::StartsWith("s.json: /world/city/path: file not found: /nonexistent/city.obj"));
+}
