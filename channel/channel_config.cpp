@@ -9,11 +9,19 @@ using core::Rule;
 template <class V>
 void Visit(V& v, JitterConfig& c) {
   v.Enum("type", c.type,
-         {{"none", JitterType::kNone}, {"normal", JitterType::kNormal}, {"uniform", JitterType::kUniform}, {"pareto", JitterType::kPareto}});
+         {{"none", JitterType::kNone},
+          {"normal", JitterType::kNormal},
+          {"uniform", JitterType::kUniform},
+          {"pareto", JitterType::kPareto}});
   switch (c.type) {
-    case JitterType::kNone: break;
-    case JitterType::kNormal: v("std_ms", c.std_ms, Rule::NonNegative(10000.0)); break;
-    case JitterType::kUniform: v("max_ms", c.max_ms, Rule::NonNegative(10000.0)); break;
+    case JitterType::kNone:
+      break;
+    case JitterType::kNormal:
+      v("std_ms", c.std_ms, Rule::NonNegative(10000.0));
+      break;
+    case JitterType::kUniform:
+      v("max_ms", c.max_ms, Rule::NonNegative(10000.0));
+      break;
     case JitterType::kPareto:
       v("scale_ms", c.scale_ms, Rule::Positive(10000.0));
       v("shape", c.shape, Rule{0.0, 100.0, true, false});
@@ -25,10 +33,15 @@ UAVSIM_INSTANTIATE_VISIT(JitterConfig);
 template <class V>
 void Visit(V& v, LossConfig& c) {
   v.Enum("type", c.type,
-         {{"none", LossType::kNone}, {"bernoulli", LossType::kBernoulli}, {"gilbert_elliott", LossType::kGilbertElliott}});
+         {{"none", LossType::kNone},
+          {"bernoulli", LossType::kBernoulli},
+          {"gilbert_elliott", LossType::kGilbertElliott}});
   switch (c.type) {
-    case LossType::kNone: break;
-    case LossType::kBernoulli: v("p", c.p, Rule::Probability()); break;
+    case LossType::kNone:
+      break;
+    case LossType::kBernoulli:
+      v("p", c.p, Rule::Probability());
+      break;
     case LossType::kGilbertElliott:
       v("p", c.p, Rule::Probability());
       v("r", c.r, Rule{0.0, 1.0, true, false});
@@ -43,7 +56,8 @@ template <class V>
 void Visit(V& v, OutageConfig& c) {
   v("from_s", c.from_s, Rule::NonNegative(1e7));
   v("to_s", c.to_s, Rule::NonNegative(1e7));
-  v.Check(c.from_s < c.to_s, "to_s", "to_s must be after from_s (" + core::FormatNumber(c.from_s) + ")");
+  v.Check(c.from_s < c.to_s, "to_s",
+          "to_s must be after from_s (" + core::FormatNumber(c.from_s) + ")");
 }
 UAVSIM_INSTANTIATE_VISIT(OutageConfig);
 

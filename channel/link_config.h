@@ -21,10 +21,10 @@ struct JitterConfig {
 
 struct LossConfig {
   LossType type = LossType::kBernoulli;
-  double p = 0.0;           // bernoulli: loss probability; gilbert_elliott: P(good -> bad)
-  double r = 0.5;           // gilbert_elliott: P(bad -> good)
-  double loss_good = 0.0;   // gilbert_elliott: loss probability in the good state
-  double loss_bad = 1.0;    // gilbert_elliott: loss probability in the bad state
+  double p = 0.0;          // bernoulli: loss probability; gilbert_elliott: P(good -> bad)
+  double r = 0.5;          // gilbert_elliott: P(bad -> good)
+  double loss_good = 0.0;  // gilbert_elliott: loss probability in the good state
+  double loss_bad = 1.0;   // gilbert_elliott: loss probability in the bad state
 };
 
 struct OutageConfig {

@@ -19,7 +19,8 @@ void Visit(V& v, PipelineConfig& c) {
   v("latent_dim", c.latent_dim, Rule::Range(1, 4096));
   v.Check(c.latent_dim == 4 || c.latent_dim == 8 || c.latent_dim == 16 || c.latent_dim == 32 ||
               c.latent_dim == 64,
-          "latent_dim", "expected one of 4, 8, 16, 32, 64 (paper Sec. VI), got " + std::to_string(c.latent_dim));
+          "latent_dim",
+          "expected one of 4, 8, 16, 32, 64 (paper Sec. VI), got " + std::to_string(c.latent_dim));
   v("late_allowance_s", c.late_allowance_s, Rule::NonNegative(10.0));
   v("methods", c.methods, KnownMethods());
 }

@@ -20,7 +20,8 @@ CsvTable::CsvTable(std::vector<std::string> columns) : columns_(columns.size()) 
 }
 
 void CsvTable::AddRow(const std::vector<std::string>& cells) {
-  if (cells.size() != columns_) throw std::logic_error("CsvTable: row has the wrong number of cells");
+  if (cells.size() != columns_)
+    throw std::logic_error("CsvTable: row has the wrong number of cells");
   for (std::size_t i = 0; i < cells.size(); ++i) {
     if (i) text_ += ',';
     text_ += cells[i];

@@ -14,7 +14,7 @@ struct FmcwRadarConfig {
   FrameTiming timing{15.0};  // paper: f_r = 15 Hz
   core::PoseConfig pose;
   double carrier_ghz = 77.0;
-  double bandwidth_mhz = 900.0;   // range resolution c / 2B = 0.167 m
+  double bandwidth_mhz = 900.0;  // range resolution c / 2B = 0.167 m
   double chirp_duration_us = 60.0;
   double idle_time_us = 20.0;
   int adc_samples = 512;

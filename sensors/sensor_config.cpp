@@ -14,7 +14,8 @@ void VisitTiming(V& v, FrameTiming& c) {
   v("phase_s", c.phase_s, Rule::NonNegative(3600.0));
   v("clock_jitter_s", c.clock_jitter_s, Rule::NonNegative(1.0));
   v.Check(c.clock_jitter_s < 0.5 / c.rate_hz, "clock_jitter_s",
-          "clock_jitter_s must be below half a frame period (" + core::FormatNumber(0.5 / c.rate_hz) + " s)");
+          "clock_jitter_s must be below half a frame period (" +
+              core::FormatNumber(0.5 / c.rate_hz) + " s)");
 }
 
 template <class V>
@@ -28,8 +29,10 @@ void Visit(V& v, FisheyeStereoConfig& c) {
   v("fy_px", c.fy_px, Rule::Positive(1e5));
   v("cx_px", c.cx_px, Rule::Range(0.0, 8192.0));
   v("cy_px", c.cy_px, Rule::Range(0.0, 8192.0));
-  v.Check(c.cx_px <= c.width_px, "cx_px", "cx_px must lie inside the image (width_px " + std::to_string(c.width_px) + ")");
-  v.Check(c.cy_px <= c.height_px, "cy_px", "cy_px must lie inside the image (height_px " + std::to_string(c.height_px) + ")");
+  v.Check(c.cx_px <= c.width_px, "cx_px",
+          "cx_px must lie inside the image (width_px " + std::to_string(c.width_px) + ")");
+  v.Check(c.cy_px <= c.height_px, "cy_px",
+          "cy_px must lie inside the image (height_px " + std::to_string(c.height_px) + ")");
   v("k1", c.k1, Rule::Range(-10.0, 10.0));
   v("k2", c.k2, Rule::Range(-10.0, 10.0));
   v("p1", c.p1, Rule::Range(-1.0, 1.0));
@@ -48,7 +51,8 @@ template <class V>
 void Visit(V& v, LidarConfig& c) {
   VisitTiming(v, c.timing);
   v.Object("pose", c.pose);
-  v.Enum("preset", c.preset, {{"spinning32", LidarPreset::kSpinning32}, {"livox_rosette", LidarPreset::kLivoxRosette}});
+  v.Enum("preset", c.preset,
+         {{"spinning32", LidarPreset::kSpinning32}, {"livox_rosette", LidarPreset::kLivoxRosette}});
   if (c.preset == LidarPreset::kSpinning32) {
     v("channels", c.channels, Rule::Range(1, 128));
     v("vertical_min_deg", c.vertical_min_deg, Rule::Range(-90.0, 90.0));
@@ -67,7 +71,8 @@ void Visit(V& v, LidarConfig& c) {
 UAVSIM_INSTANTIATE_VISIT(LidarConfig);
 
 double FmcwRadarConfig::RaysPerFrame() const {
-  return std::ceil(fov_azimuth_deg / ray_density_deg) * std::ceil(fov_elevation_deg / ray_density_deg);
+  return std::ceil(fov_azimuth_deg / ray_density_deg) *
+         std::ceil(fov_elevation_deg / ray_density_deg);
 }
 
 template <class V>
@@ -81,13 +86,16 @@ void Visit(V& v, FmcwRadarConfig& c) {
   v("adc_samples", c.adc_samples, Rule::Range(8, 8192));
   v("sample_rate_msps", c.sample_rate_msps, Rule::Positive(1000.0));
   v.Check(c.adc_samples / c.sample_rate_msps <= c.chirp_duration_us, "adc_samples",
-          "the ADC window adc_samples / sample_rate (" + core::FormatNumber(c.adc_samples / c.sample_rate_msps) +
-              " us) must fit in chirp_duration_us (" + core::FormatNumber(c.chirp_duration_us) + ")");
+          "the ADC window adc_samples / sample_rate (" +
+              core::FormatNumber(c.adc_samples / c.sample_rate_msps) +
+              " us) must fit in chirp_duration_us (" + core::FormatNumber(c.chirp_duration_us) +
+              ")");
   v("chirps_per_frame", c.chirps_per_frame, Rule::Range(1, 4096));
   const double chirps_s = c.chirps_per_frame * (c.chirp_duration_us + c.idle_time_us) * 1e-6;
   v.Check(chirps_s <= 1.0 / c.timing.rate_hz, "chirps_per_frame",
-          "the chirps of one frame last " + core::FormatNumber(chirps_s) + " s, longer than the frame period (" +
-              core::FormatNumber(1.0 / c.timing.rate_hz) + " s)");
+          "the chirps of one frame last " + core::FormatNumber(chirps_s) +
+              " s, longer than the frame period (" + core::FormatNumber(1.0 / c.timing.rate_hz) +
+              " s)");
   v("tx_power_dbm", c.tx_power_dbm, Rule::Range(-50.0, 60.0));
   v("antenna_gain_dbi", c.antenna_gain_dbi, Rule::Range(-20.0, 50.0));
   v("noise_figure_db", c.noise_figure_db, Rule::Range(0.0, 50.0));
@@ -102,53 +110,49 @@ void Visit(V& v, FmcwRadarConfig& c) {
 UAVSIM_INSTANTIATE_VISIT(FmcwRadarConfig);
 
 const FrameTiming& SensorConfig::timing() const {
-  switch (type) {
-    case SensorType::kLidar: return lidar.timing;
-    case SensorType::kFmcwRadar: return radar.timing;
-    default: return fisheye.timing;
-  }
+  return WithActive([](const auto& c) -> const FrameTiming& { return c.timing; });
 }
 
 const core::PoseConfig& SensorConfig::pose() const {
-  switch (type) {
-    case SensorType::kLidar: return lidar.pose;
-    case SensorType::kFmcwRadar: return radar.pose;
-    default: return fisheye.pose;
-  }
+  return WithActive([](const auto& c) -> const core::PoseConfig& { return c.pose; });
 }
 
 const char* SensorConfig::modality() const {
   switch (type) {
-    case SensorType::kLidar: return "lidar";
-    case SensorType::kFmcwRadar: return "radar";
-    default: return "camera";
+    case SensorType::kLidar:
+      return "lidar";
+    case SensorType::kFmcwRadar:
+      return "radar";
+    default:
+      return "camera";
   }
 }
 
 double SensorConfig::RaysPerFrame() const {
-  switch (type) {
-    case SensorType::kLidar: return lidar.RaysPerFrame();
-    case SensorType::kFmcwRadar: return radar.RaysPerFrame();
-    default: return fisheye.RaysPerFrame();
-  }
+  return WithActive([](const auto& c) { return c.RaysPerFrame(); });
 }
 
 double SensorConfig::RawBytesPerFrame() const {
-  switch (type) {
-    case SensorType::kLidar: return lidar.RawBytesPerFrame();
-    case SensorType::kFmcwRadar: return radar.RawBytesPerFrame();
-    default: return fisheye.RawBytesPerFrame();
-  }
+  return WithActive([](const auto& c) { return c.RawBytesPerFrame(); });
 }
 
 template <class V>
 void Visit(V& v, SensorConfig& c) {
   v.Enum("type", c.type,
-         {{"fisheye_stereo", SensorType::kFisheyeStereo}, {"lidar", SensorType::kLidar}, {"fmcw_radar", SensorType::kFmcwRadar}});
+         {{"fisheye_stereo", SensorType::kFisheyeStereo},
+          {"lidar", SensorType::kLidar},
+          {"fmcw_radar", SensorType::kFmcwRadar}});
+  // The type's keys sit beside "type" in the same object.
   switch (c.type) {
-    case SensorType::kFisheyeStereo: Visit(v, c.fisheye); break;
-    case SensorType::kLidar: Visit(v, c.lidar); break;
-    case SensorType::kFmcwRadar: Visit(v, c.radar); break;
+    case SensorType::kFisheyeStereo:
+      Visit(v, c.fisheye);
+      break;
+    case SensorType::kLidar:
+      Visit(v, c.lidar);
+      break;
+    case SensorType::kFmcwRadar:
+      Visit(v, c.radar);
+      break;
   }
 }
 UAVSIM_INSTANTIATE_VISIT(SensorConfig);

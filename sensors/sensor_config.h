@@ -26,6 +26,19 @@ struct SensorConfig {
   // Cost estimates for the resource guard and the data-rate table.
   double RaysPerFrame() const;
   double RawBytesPerFrame() const;
+
+  // Calls f with the active type's config.
+  template <class F>
+  decltype(auto) WithActive(F&& f) const {
+    switch (type) {
+      case SensorType::kLidar:
+        return f(lidar);
+      case SensorType::kFmcwRadar:
+        return f(radar);
+      default:
+        return f(fisheye);
+    }
+  }
 };
 
 template <class V>

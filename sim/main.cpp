@@ -30,12 +30,14 @@ constexpr int kExitBadInput = 2;
 constexpr int kExitInterrupted = 130;
 
 const char* kMainHelp =
-    "uavsim: discrete-event network and sensing simulator for edge-assisted multimodal UAV localization\n"
+    "uavsim: discrete-event network and sensing simulator for edge-assisted multimodal UAV "
+    "localization\n"
     "\n"
     "usage: uavsim COMMAND [OPTIONS]\n"
     "\n"
     "commands:\n"
-    "  validate SCENARIO.json     check a scenario; exit 0, or exit 2 with FILE: /json/pointer: message\n"
+    "  validate SCENARIO.json     check a scenario; exit 0, or exit 2 with FILE: /json/pointer: "
+    "message\n"
     "  run SCENARIO.json          run a scenario and write its run directory\n"
     "  sweep SPEC.json            run a grid of scenarios (packet loss x weather x seeds)\n"
     "  train SCENARIO.json        train the UAVLoc model by simulation\n"
@@ -56,7 +58,8 @@ const char* kValidateHelp =
     "  --quiet       print nothing on success\n";
 
 const char* kRunHelp =
-    "usage: uavsim run SCENARIO.json [--out DIR] [--seed N] [--duration S] [--record camera,lidar,radar]\n"
+    "usage: uavsim run SCENARIO.json [--out DIR] [--seed N] [--duration S] [--record "
+    "camera,lidar,radar]\n"
     "                               [--set /json/pointer=value]... [--force] [--quiet]\n"
     "\n"
     "Runs the scenario and writes DIR (default runs/NAME-sSEED): manifest.json, truth.csv,\n"
@@ -107,7 +110,8 @@ struct ParsedArgs {
 };
 
 ParsedArgs Parse(const std::string& cmd, int argc, char** argv, int first,
-                 const std::set<std::string>& value_options, const std::set<std::string>& flag_options) {
+                 const std::set<std::string>& value_options,
+                 const std::set<std::string>& flag_options) {
   ParsedArgs a;
   for (int i = first; i < argc; ++i) {
     std::string arg = argv[i];
@@ -128,7 +132,8 @@ ParsedArgs Parse(const std::string& cmd, int argc, char** argv, int first,
       } else if (flag_options.count(name) && !has_inline) {
         a.flags.insert(name);
       } else {
-        throw UsageError("uavsim " + cmd + ": unknown option '" + arg + "' (see uavsim " + cmd + " --help)");
+        throw UsageError("uavsim " + cmd + ": unknown option '" + arg + "' (see uavsim " + cmd +
+                         " --help)");
       }
     } else {
       a.positional.push_back(arg);
@@ -144,33 +149,37 @@ std::vector<std::string> Overrides(const ParsedArgs& a) {
 
 const std::string& OneScenario(const std::string& cmd, const ParsedArgs& a) {
   if (a.positional.size() != 1)
-    throw UsageError("uavsim " + cmd + ": expected one scenario file (see uavsim " + cmd + " --help)");
+    throw UsageError("uavsim " + cmd + ": expected one scenario file (see uavsim " + cmd +
+                     " --help)");
   return a.positional[0];
 }
 
 int Validate(int argc, char** argv) {
-  const ParsedArgs a = Parse("validate", argc, argv, 2, {"--set"}, {"--quiet", "--resolved", "--help"});
+  const ParsedArgs a =
+      Parse("validate", argc, argv, 2, {"--set"}, {"--quiet", "--resolved", "--help"});
   if (a.Has("--help")) return std::cout << kValidateHelp, kExitOk;
   const std::string& file = OneScenario("validate", a);
   const uavsim::sim::Scenario s = uavsim::sim::LoadScenario(file, Overrides(a));
   if (a.Has("--resolved")) std::cout << uavsim::sim::ResolvedJson(s).dump(2) << "\n";
   if (!a.Has("--quiet") && !a.Has("--resolved")) {
     const auto e = uavsim::sim::EstimateResources(s);
-    std::printf("%s: ok (%zu UAV%s, %zu node%s, %g s simulated, %.3g rays per simulated second)\n", file.c_str(),
-                s.uavs.size(), s.uavs.size() == 1 ? "" : "s", s.nodes.size(), s.nodes.size() == 1 ? "" : "s",
-                s.duration_s, e.rays_per_s);
+    std::printf("%s: ok (%zu UAV%s, %zu node%s, %g s simulated, %.3g rays per simulated second)\n",
+                file.c_str(), s.uavs.size(), s.uavs.size() == 1 ? "" : "s", s.nodes.size(),
+                s.nodes.size() == 1 ? "" : "s", s.duration_s, e.rays_per_s);
   }
   return kExitOk;
 }
 
 int Run(int argc, char** argv) {
-  const ParsedArgs a = Parse("run", argc, argv, 2, {"--out", "--seed", "--duration", "--record", "--set"},
-                             {"--quiet", "--force", "--help"});
+  const ParsedArgs a =
+      Parse("run", argc, argv, 2, {"--out", "--seed", "--duration", "--record", "--set"},
+            {"--quiet", "--force", "--help"});
   if (a.Has("--help")) return std::cout << kRunHelp, kExitOk;
   const std::string& file = OneScenario("run", a);
   std::vector<std::string> overrides = Overrides(a);
   if (auto seed = a.Value("--seed")) {
-    if (seed->empty() || seed->find_first_not_of("0123456789") != std::string::npos || seed->size() > 19)
+    if (seed->empty() || seed->find_first_not_of("0123456789") != std::string::npos ||
+        seed->size() > 19)
       throw UsageError("uavsim run: --seed expects a non-negative integer, got '" + *seed + "'");
     overrides.push_back("/seed=" + *seed);
   }
@@ -178,7 +187,8 @@ int Run(int argc, char** argv) {
     char* end = nullptr;
     const double v = std::strtod(d->c_str(), &end);
     if (d->empty() || *end != '\0' || !(v > 0))
-      throw UsageError("uavsim run: --duration expects a positive number of seconds, got '" + *d + "'");
+      throw UsageError("uavsim run: --duration expects a positive number of seconds, got '" + *d +
+                       "'");
     overrides.push_back("/duration_s=" + *d);
   }
   uavsim::sim::RunOptions o;
@@ -190,7 +200,8 @@ int Run(int argc, char** argv) {
     std::string m;
     while (std::getline(ss, m, ',')) {
       if (m != "camera" && m != "lidar" && m != "radar")
-        throw UsageError("uavsim run: --record expects a list of camera, lidar, radar; got '" + m + "'");
+        throw UsageError("uavsim run: --record expects a list of camera, lidar, radar; got '" + m +
+                         "'");
       o.record.push_back(m);
     }
   }
@@ -198,10 +209,11 @@ int Run(int argc, char** argv) {
   o.out_dir = a.Value("--out").value_or("runs/" + s.name + "-s" + std::to_string(s.seed));
   const auto summary = uavsim::sim::RunScenario(s, o);
   if (!o.quiet) {
-    std::printf("%s: %g s simulated in %.3f s (%.3gx real time); truth.csv %zu rows; frames", o.out_dir.c_str(),
-                summary.sim_s, summary.wall_s, summary.wall_s > 0 ? summary.sim_s / summary.wall_s : 0.0,
-                summary.truth_rows);
-    for (const auto& [m, n] : summary.frames) std::printf(" %s %llu", m.c_str(), static_cast<unsigned long long>(n));
+    std::printf("%s: %g s simulated in %.3f s (%.3gx real time); truth.csv %zu rows; frames",
+                o.out_dir.c_str(), summary.sim_s, summary.wall_s,
+                summary.wall_s > 0 ? summary.sim_s / summary.wall_s : 0.0, summary.truth_rows);
+    for (const auto& [m, n] : summary.frames)
+      std::printf(" %s %llu", m.c_str(), static_cast<unsigned long long>(n));
     std::printf("\n");
   }
   return kExitOk;
@@ -210,14 +222,16 @@ int Run(int argc, char** argv) {
 int NotYet(const std::string& cmd, const char* help, const char* issue, int argc, char** argv) {
   for (int i = 2; i < argc; ++i)
     if (std::string(argv[i]) == "--help") return std::cout << help, kExitOk;
-  std::cerr << "uavsim " << cmd << ": not available yet (it arrives with the issue \"" << issue << "\")\n";
+  std::cerr << "uavsim " << cmd << ": not available yet (it arrives with the issue \"" << issue
+            << "\")\n";
   return kExitBadInput;
 }
 
 int Bench(int argc, char** argv) {
   const ParsedArgs a = Parse("bench", argc, argv, 2, {}, {"--quiet", "--help"});
   if (a.Has("--help")) return std::cout << kBenchHelp, kExitOk;
-  if (a.positional.size() > 1) throw UsageError("uavsim bench: expected at most one target (see uavsim bench --help)");
+  if (a.positional.size() > 1)
+    throw UsageError("uavsim bench: expected at most one target (see uavsim bench --help)");
   const std::string what = a.positional.empty() ? "all" : a.positional[0];
   if (what == "events" || what == "all") {
     const int rc = uavsim::sim::BenchEvents(a.Has("--quiet"), std::cout);
@@ -230,7 +244,8 @@ int Bench(int argc, char** argv) {
     std::cerr << "uavsim bench " << what << ": not available yet\n";
     return kExitBadInput;
   }
-  throw UsageError("uavsim bench: unknown target '" + what + "' (raycast, events, pipeline or all)");
+  throw UsageError("uavsim bench: unknown target '" + what +
+                   "' (raycast, events, pipeline or all)");
 }
 
 int Main(int argc, char** argv) {

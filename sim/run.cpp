@@ -7,10 +7,10 @@
 
 #include "results/csv.h"
 #include "results/run_directory.h"
-#include "sim/core/simulator.h"
 #include "sim/core/periodic_process.h"
 #include "sim/core/progress.h"
 #include "sim/core/rng.h"
+#include "sim/core/simulator.h"
 #include "sim/core/time.h"
 #include "sim/version.h"
 
@@ -52,19 +52,20 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
   const core::SimTime t_end = core::Seconds(s.duration_s);
 
   // Ground truth of the target, sampled on its own timer.
-  const auto target = core::MakeTrajectory(s.uavs.front().trajectory,
-                                           core::RngStream(s.seed, "uav/" + s.uavs.front().id + "/trajectory"));
+  const auto target =
+      core::MakeTrajectory(s.uavs.front().trajectory,
+                           core::RngStream(s.seed, "uav/" + s.uavs.front().id + "/trajectory"));
   results::CsvTable truth({"t_s", "x_m", "y_m", "z_m", "vx_mps", "vy_mps", "vz_mps"});
-  core::PeriodicProcess truth_timer(s.outputs.truth_rate_hz, 0.0, 0.0, core::RngStream(s.seed, "truth"),
-                                    [&](std::int64_t, core::SimTime t) {
-                                      const auto x = target->StateAt(core::ToSeconds(t));
-                                      using results::FormatFixed;
-                                      truth.AddRow({FormatFixed(core::ToSeconds(t), 6),
-                                                    FormatFixed(x.position_m.x(), 6), FormatFixed(x.position_m.y(), 6),
-                                                    FormatFixed(x.position_m.z(), 6), FormatFixed(x.velocity_mps.x(), 6),
-                                                    FormatFixed(x.velocity_mps.y(), 6),
-                                                    FormatFixed(x.velocity_mps.z(), 6)});
-                                    });
+  core::PeriodicProcess truth_timer(
+      s.outputs.truth_rate_hz, 0.0, 0.0, core::RngStream(s.seed, "truth"),
+      [&](std::int64_t, core::SimTime t) {
+        const auto x = target->StateAt(core::ToSeconds(t));
+        using results::FormatFixed;
+        truth.AddRow({FormatFixed(core::ToSeconds(t), 6), FormatFixed(x.position_m.x(), 6),
+                      FormatFixed(x.position_m.y(), 6), FormatFixed(x.position_m.z(), 6),
+                      FormatFixed(x.velocity_mps.x(), 6), FormatFixed(x.velocity_mps.y(), 6),
+                      FormatFixed(x.velocity_mps.z(), 6)});
+      });
   truth_timer.Start(sim, 0, t_end);
 
   // Frame timers of every sensing node, each with its own clock stream. The
@@ -78,7 +79,8 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
     const std::string modality = node.sensor.modality();
     const auto bytes = static_cast<std::uint64_t>(node.sensor.RawBytesPerFrame());
     frame_timers.push_back(std::make_unique<core::PeriodicProcess>(
-        timing.rate_hz, timing.phase_s, timing.clock_jitter_s, core::RngStream(s.seed, "node/" + node.id + "/clock"),
+        timing.rate_hz, timing.phase_s, timing.clock_jitter_s,
+        core::RngStream(s.seed, "node/" + node.id + "/clock"),
         [&frames, &raw_bytes, modality, bytes](std::int64_t, core::SimTime) {
           ++frames[modality];
           raw_bytes[modality] += bytes;
@@ -104,7 +106,8 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
   summary.sim_s = s.duration_s;
   summary.truth_rows = truth.rows();
   summary.frames = frames;
-  summary.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  summary.wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
 
   dir.WriteText("truth.csv", truth.str());
 

@@ -15,11 +15,11 @@
 namespace uavsim::sim {
 
 struct RunOptions {
-  std::string out_dir;               // final run directory
-  bool force = false;                // replace an existing out_dir
-  bool quiet = false;                // no progress, no summary
-  std::vector<std::string> record;   // modalities to record: camera, lidar, radar
-  std::string scenario_file;         // for the manifest
+  std::string out_dir;              // final run directory
+  bool force = false;               // replace an existing out_dir
+  bool quiet = false;               // no progress, no summary
+  std::vector<std::string> record;  // modalities to record: camera, lidar, radar
+  std::string scenario_file;        // for the manifest
 };
 
 struct RunSummary {

@@ -24,7 +24,8 @@ bool IsValidId(const std::string& id) {
 template <class V>
 void CheckId(V& v, const char* key, const std::string& id) {
   const std::string rule = "expected an id of 1 to 64 letters, digits, '_' or '-'";
-  if (!v.Has(key)) v.Check(!id.empty(), key, "missing required key \"" + std::string(key) + "\": " + rule);
+  if (!v.Has(key))
+    v.Check(!id.empty(), key, "missing required key \"" + std::string(key) + "\": " + rule);
   v.Check(IsValidId(id), key, rule + ", got " + core::DescribeValue(Json(id)));
 }
 
@@ -86,7 +87,8 @@ void Visit(V& v, SnrGridConfig& c) {
   v("to", c.to, Rule::Range(-100.0, 100.0));
   v("step", c.step, Rule::Range(0.01, 100.0));
   v.Check(c.from <= c.to, "to", "to must be >= from (" + core::FormatNumber(c.from) + ")");
-  v.Check((c.to - c.from) / c.step <= 10000.0, "step", "the SNR grid would have more than 10000 points");
+  v.Check((c.to - c.from) / c.step <= 10000.0, "step",
+          "the SNR grid would have more than 10000 points");
 }
 UAVSIM_INSTANTIATE_VISIT(SnrGridConfig);
 
@@ -123,8 +125,10 @@ ResourceEstimate EstimateResources(const Scenario& s) {
     const double rays_per_s = sensor.RaysPerFrame() * sensor.timing().rate_hz;
     e.rays_per_s += rays_per_s;
     if (rays_per_s > max_node_rays_per_s) max_node_rays_per_s = rays_per_s, e.max_rays_node = i;
-    if (sensor.RaysPerFrame() > e.max_frame_rays) e.max_frame_rays = sensor.RaysPerFrame(), e.max_frame_rays_node = i;
-    if (sensor.RawBytesPerFrame() > e.max_frame_bytes) e.max_frame_bytes = sensor.RawBytesPerFrame(), e.max_frame_node = i;
+    if (sensor.RaysPerFrame() > e.max_frame_rays)
+      e.max_frame_rays = sensor.RaysPerFrame(), e.max_frame_rays_node = i;
+    if (sensor.RawBytesPerFrame() > e.max_frame_bytes)
+      e.max_frame_bytes = sensor.RawBytesPerFrame(), e.max_frame_node = i;
   }
   e.rays_total = e.rays_per_s * s.duration_s;
   return e;
@@ -133,13 +137,14 @@ ResourceEstimate EstimateResources(const Scenario& s) {
 namespace {
 
 // A file a scenario refers to, relative to the scenario's folder.
-std::filesystem::path RequireFile(const std::string& file, const std::string& pointer, const std::string& base_dir,
-                                  const std::string& path) {
+std::filesystem::path RequireFile(const std::string& file, const std::string& pointer,
+                                  const std::string& base_dir, const std::string& path) {
   namespace fs = std::filesystem;
   const fs::path p = (fs::path(base_dir) / path).lexically_normal();
   std::error_code ec;
   if (!fs::exists(p, ec)) throw ConfigError(file, pointer, "file not found: " + p.string());
-  if (!fs::is_regular_file(p, ec)) throw ConfigError(file, pointer, "not a regular file: " + p.string());
+  if (!fs::is_regular_file(p, ec))
+    throw ConfigError(file, pointer, "not a regular file: " + p.string());
   return p;
 }
 
@@ -149,41 +154,47 @@ void CheckScenario(const Scenario& s, const std::string& file) {
   std::set<std::string> ids;
   for (std::size_t i = 0; i < s.uavs.size(); ++i)
     if (!ids.insert(s.uavs[i].id).second)
-      throw ConfigError(file, "/uavs/" + std::to_string(i) + "/id", "duplicate UAV id \"" + s.uavs[i].id + "\"");
+      throw ConfigError(file, "/uavs/" + std::to_string(i) + "/id",
+                        "duplicate UAV id \"" + s.uavs[i].id + "\"");
   ids.clear();
   for (std::size_t i = 0; i < s.nodes.size(); ++i) {
     const NodeConfig& n = s.nodes[i];
     const std::string at = "/nodes/" + std::to_string(i);
-    if (!ids.insert(n.id).second) throw ConfigError(file, at + "/id", "duplicate node id \"" + n.id + "\"");
+    if (!ids.insert(n.id).second)
+      throw ConfigError(file, at + "/id", "duplicate node id \"" + n.id + "\"");
     if (!s.links.count(n.uplink)) {
       std::string known;
-      for (const auto& [name, link] : s.links) known += (known.empty() ? "\"" : ", \"") + name + "\"";
+      for (const auto& [name, link] : s.links)
+        known += (known.empty() ? "\"" : ", \"") + name + "\"";
       throw ConfigError(file, at + "/uplink",
-                        "no link named \"" + n.uplink + "\" in /links (known: " + (known.empty() ? "none" : known) + ")");
+                        "no link named \"" + n.uplink +
+                            "\" in /links (known: " + (known.empty() ? "none" : known) + ")");
     }
   }
   for (const auto& [name, link] : s.links)
     if (!IsValidId(name))
       throw ConfigError(file, "/links/" + core::EscapePointerToken(name),
                         "expected a link name of 1 to 64 letters, digits, '_' or '-'");
-  if (s.pipeline.model != "default") RequireFile(file, "/pipeline/model", s.base_dir, s.pipeline.model);
+  if (s.pipeline.model != "default")
+    RequireFile(file, "/pipeline/model", s.base_dir, s.pipeline.model);
   if (s.world.city.type == core::CityType::kMesh) {
     namespace fs = std::filesystem;
     const fs::path p = RequireFile(file, "/world/city/path", s.base_dir, s.world.city.path);
     const std::string ext = p.extension().string();
     if (ext != ".obj" && ext != ".OBJ" && ext != ".ply" && ext != ".PLY")
-      throw ConfigError(file, "/world/city/path", "expected an .obj or .ply file, got \"" + s.world.city.path + "\"");
+      throw ConfigError(file, "/world/city/path",
+                        "expected an .obj or .ply file, got \"" + s.world.city.path + "\"");
   }
   const ResourceEstimate e = EstimateResources(s);
   auto node_sensor = [](std::size_t i) { return "/nodes/" + std::to_string(i) + "/sensor"; };
   if (e.max_frame_rays > kMaxRaysPerFrame)
     throw ConfigError(file, node_sensor(e.max_frame_rays_node),
-                      "refused: one frame would cast " + Sci(e.max_frame_rays) + " rays; the limit is " +
-                          Sci(kMaxRaysPerFrame));
+                      "refused: one frame would cast " + Sci(e.max_frame_rays) +
+                          " rays; the limit is " + Sci(kMaxRaysPerFrame));
   if (e.max_frame_bytes > kMaxFrameBytes)
     throw ConfigError(file, node_sensor(e.max_frame_node),
-                      "refused: one raw frame would take " + Sci(e.max_frame_bytes) + " bytes; the limit is " +
-                          Sci(kMaxFrameBytes));
+                      "refused: one raw frame would take " + Sci(e.max_frame_bytes) +
+                          " bytes; the limit is " + Sci(kMaxFrameBytes));
   if (e.rays_per_s > kMaxRaysPerSimSecond)
     throw ConfigError(file, node_sensor(e.max_rays_node),
                       "refused: the sensors would cast " + Sci(e.rays_per_s) +
@@ -193,13 +204,15 @@ void CheckScenario(const Scenario& s, const std::string& file) {
                           "); the limit is " + Sci(kMaxRaysPerSimSecond));
   if (e.rays_total > kMaxRaysPerRun)
     throw ConfigError(file, "/duration_s",
-                      "refused: the run would cast " + Sci(e.rays_total) + " rays (" + Sci(e.rays_per_s) +
-                          " per simulated second for " + Sci(s.duration_s) + " s); the limit is " + Sci(kMaxRaysPerRun));
+                      "refused: the run would cast " + Sci(e.rays_total) + " rays (" +
+                          Sci(e.rays_per_s) + " per simulated second for " + Sci(s.duration_s) +
+                          " s); the limit is " + Sci(kMaxRaysPerRun));
   const double truth_rows = s.outputs.truth_rate_hz * s.duration_s;
   if (truth_rows > kMaxTruthRows)
     throw ConfigError(file, "/outputs/truth_rate_hz",
                       "refused: truth.csv would have " + Sci(truth_rows) + " rows (about " +
-                          Sci(truth_rows * 70.0) + " bytes); the limit is " + Sci(kMaxTruthRows) + " rows");
+                          Sci(truth_rows * 70.0) + " bytes); the limit is " + Sci(kMaxTruthRows) +
+                          " rows");
 }
 
 }  // namespace
@@ -222,7 +235,8 @@ void ApplyOverride(Json& doc, const std::string& assignment) {
   std::size_t pos = 1;
   while (true) {
     const auto slash = pointer.find('/', pos);
-    std::string token = pointer.substr(pos, slash == std::string::npos ? std::string::npos : slash - pos);
+    std::string token =
+        pointer.substr(pos, slash == std::string::npos ? std::string::npos : slash - pos);
     for (std::size_t i = 0; (i = token.find('~', i)) != std::string::npos; ++i) {
       if (i + 1 < token.size() && (token[i + 1] == '0' || token[i + 1] == '1'))
         token.replace(i, 2, token[i + 1] == '0' ? "~" : "/");
@@ -233,10 +247,12 @@ void ApplyOverride(Json& doc, const std::string& assignment) {
     at += "/" + core::EscapePointerToken(token);
     if (node->is_array()) {
       std::size_t idx = 0;
-      if (token.empty() || token.find_first_not_of("0123456789") != std::string::npos || token.size() > 6 ||
-          (idx = std::stoul(token)) >= node->size())
-        throw ConfigError("--set", at, "no such array element (the array has " + std::to_string(node->size()) +
-                                           " elements; the defaults of an array are not addressable, write it in the file)");
+      if (token.empty() || token.find_first_not_of("0123456789") != std::string::npos ||
+          token.size() > 6 || (idx = std::stoul(token)) >= node->size())
+        throw ConfigError(
+            "--set", at,
+            "no such array element (the array has " + std::to_string(node->size()) +
+                " elements; the defaults of an array are not addressable, write it in the file)");
       node = &(*node)[idx];
     } else if (node->is_object()) {
       if (last) {

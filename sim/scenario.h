@@ -114,7 +114,8 @@ void ApplyOverride(core::Json& doc, const std::string& assignment);
 Scenario LoadScenario(const std::string& path, const std::vector<std::string>& overrides = {});
 // The same from a document already in memory; `file` names it in messages and
 // `base_dir` resolves relative paths.
-Scenario ScenarioFromJson(const core::Json& doc, const std::string& file, const std::string& base_dir);
+Scenario ScenarioFromJson(const core::Json& doc, const std::string& file,
+                          const std::string& base_dir);
 
 // The resolved scenario: every key, defaults filled.
 core::Json ResolvedJson(const Scenario& s);

@@ -1,12 +1,12 @@
 #include "sim/core/json_io.h"
 
+#include <sys/stat.h>
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <fstream>
 #include <sstream>
-#include <sys/stat.h>
 
 namespace uavsim::core {
 namespace {
@@ -41,7 +41,8 @@ class DuplicateKeyGuard {
       case E::object_start:
       case E::array_start:
         if (depth >= kMaxDepth)
-          throw ConfigError(name_, Pointer(), "nesting deeper than " + std::to_string(kMaxDepth) + " levels");
+          throw ConfigError(name_, Pointer(),
+                            "nesting deeper than " + std::to_string(kMaxDepth) + " levels");
         frames_.push_back({event == E::array_start, 0, {}, {}});
         break;
       case E::key: {
@@ -70,6 +71,7 @@ class DuplicateKeyGuard {
       p += "/" + (f.is_array ? std::to_string(f.index) : EscapePointerToken(f.key));
     return p;
   }
+
  private:
   struct Frame {
     bool is_array;
@@ -148,13 +150,15 @@ std::string DescribeValue(const Json& j) {
 }
 
 Json ParseJsonText(const std::string& text, const std::string& name) {
-  if (text.size() >= 2 && ((text[0] == '\xff' && text[1] == '\xfe') || (text[0] == '\xfe' && text[1] == '\xff')))
+  if (text.size() >= 2 &&
+      ((text[0] == '\xff' && text[1] == '\xfe') || (text[0] == '\xfe' && text[1] == '\xff')))
     throw ConfigError(name, "", "invalid JSON: the file is UTF-16; save it as UTF-8");
   // nlohmann's lexer takes a NUL byte for the end of the input and would
   // ignore whatever follows it.
   if (const auto nul = text.find('\0'); nul != std::string::npos) {
     const auto line_start = text.rfind('\n', nul);
-    const std::size_t line = 1 + static_cast<std::size_t>(std::count(text.begin(), text.begin() + nul, '\n'));
+    const std::size_t line =
+        1 + static_cast<std::size_t>(std::count(text.begin(), text.begin() + nul, '\n'));
     const std::size_t column = nul - (line_start == std::string::npos ? 0 : line_start + 1) + 1;
     throw ConfigError(name, "line " + std::to_string(line) + ", column " + std::to_string(column),
                       "invalid JSON: NUL byte (is this a binary or UTF-16 file?)");
@@ -185,7 +189,8 @@ Json ParseJsonText(const std::string& text, const std::string& name) {
       literal = what.substr(q + 1, what.find('\'', q + 1) - q - 1);
       if (literal.size() > 24) literal = literal.substr(0, 20) + "...";
     }
-    throw ConfigError(name, guard.Pointer(), "expected a finite number, got " + literal + " (out of range)");
+    throw ConfigError(name, guard.Pointer(),
+                      "expected a finite number, got " + literal + " (out of range)");
   } catch (const Json::exception& e) {
     throw ConfigError(name, "", std::string("invalid JSON: ") + e.what());
   }
@@ -197,8 +202,9 @@ Json LoadJsonFile(const std::string& path) {
     throw ConfigError(path, "", std::string("cannot read file: ") + std::strerror(errno));
   if (S_ISDIR(st.st_mode)) throw ConfigError(path, "", "cannot read file: is a directory");
   if (static_cast<std::size_t>(st.st_size) > kMaxFileBytes)
-    throw ConfigError(path, "", "file is " + std::to_string(st.st_size) + " bytes; the limit is " +
-                                    std::to_string(kMaxFileBytes));
+    throw ConfigError(path, "",
+                      "file is " + std::to_string(st.st_size) + " bytes; the limit is " +
+                          std::to_string(kMaxFileBytes));
   std::ifstream in(path, std::ios::binary);
   if (!in) throw ConfigError(path, "", std::string("cannot read file: ") + std::strerror(errno));
   std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -228,29 +234,35 @@ void JsonReader::Fail(const char* key, const std::string& expected, const Json& 
 void JsonReader::Check(bool ok, const char* key, const std::string& message) {
   // Held back until Finish: a misspelt key explains a broken rule better
   // than the rule does ({"from": 40, "too": 50} is about "too", not "to").
-  if (!ok && !deferred_) deferred_ = ConfigError(file_, key && *key ? Child(key) : pointer_, message);
+  if (!ok && !deferred_)
+    deferred_ = ConfigError(file_, key && *key ? Child(key) : pointer_, message);
 }
 
 void JsonReader::CheckSize(const char* key, std::size_t n, std::size_t min_size,
                            std::size_t max_size) const {
   if (n < min_size || n > max_size) {
     const std::size_t bound = n < min_size ? min_size : max_size;
-    const std::string want = (max_size == min_size ? "exactly " : n < min_size ? "at least " : "at most ") +
+    const std::string want = (max_size == min_size ? "exactly "
+                              : n < min_size       ? "at least "
+                                                   : "at most ") +
                              std::to_string(bound) + (bound == 1 ? " element" : " elements");
-    throw ConfigError(file_, Child(key), "expected an array of " + want + ", got " + std::to_string(n));
+    throw ConfigError(file_, Child(key),
+                      "expected an array of " + want + ", got " + std::to_string(n));
   }
 }
 
 double JsonReader::ReadNumber(const char* key, const Json& j, Rule r, bool integer,
                               const std::string& at) const {
   const std::string expected = r.Describe(integer);
-  if (!j.is_number()) throw ConfigError(file_, at, "expected " + expected + ", got " + DescribeValue(j));
+  if (!j.is_number())
+    throw ConfigError(file_, at, "expected " + expected + ", got " + DescribeValue(j));
   const double x = j.get<double>();
   if (!std::isfinite(x))
     throw ConfigError(file_, at, "expected " + expected + ", got " + DescribeValue(j));
   if (integer && (j.is_number_float() && std::floor(x) != x))
     throw ConfigError(file_, at, "expected " + expected + ", got " + DescribeValue(j));
-  if (!r.Contains(x)) throw ConfigError(file_, at, "expected " + expected + ", got " + DescribeValue(j));
+  if (!r.Contains(x))
+    throw ConfigError(file_, at, "expected " + expected + ", got " + DescribeValue(j));
   (void)key;
   return x;
 }
@@ -270,7 +282,8 @@ void JsonReader::operator()(const char* key, std::int64_t& v, Rule r) {
   r.max = std::min(r.max, 9.0e18);
   if (const Json* j = Find(key)) {
     ReadNumber(key, *j, r, true, Child(key));
-    v = j->is_number_integer() ? j->get<std::int64_t>() : static_cast<std::int64_t>(j->get<double>());
+    v = j->is_number_integer() ? j->get<std::int64_t>()
+                               : static_cast<std::int64_t>(j->get<double>());
   }
 }
 
@@ -321,7 +334,8 @@ void ReadFixedVector(JsonReader& rd, const char* key, const Json& j, Rule r, dou
     const Json& e = j[i];
     const std::string at = rd.Child(key) + "/" + std::to_string(i);
     if (!e.is_number() || !std::isfinite(e.get<double>()) || !r.Contains(e.get<double>()))
-      throw ConfigError(rd.file(), at, "expected " + r.Describe(false) + ", got " + DescribeValue(e));
+      throw ConfigError(rd.file(), at,
+                        "expected " + r.Describe(false) + ", got " + DescribeValue(e));
     out[i] = e.get<double>();
   }
 }
@@ -393,7 +407,8 @@ void JsonReader::Finish() const {
     for (const auto& k : asked_) {
       // A key written without its unit suffix ("rate" for "rate_hz") is as
       // good as a one-letter typo.
-      const bool unit_missing = k.size() > it.key().size() && k.compare(0, it.key().size(), it.key()) == 0 &&
+      const bool unit_missing = k.size() > it.key().size() &&
+                                k.compare(0, it.key().size(), it.key()) == 0 &&
                                 k[it.key().size()] == '_';
       const std::size_t d = unit_missing ? 1 : EditDistance(it.key(), k);
       if (d < best_d) best_d = d, best = k;

@@ -101,7 +101,8 @@ class JsonReader {
         }
     }
     std::string list;
-    for (const auto& [name, value] : names) list += (list.empty() ? "\"" : ", \"") + std::string(name) + "\"";
+    for (const auto& [name, value] : names)
+      list += (list.empty() ? "\"" : ", \"") + std::string(name) + "\"";
     Fail(key, "one of " + list, *j);
   }
 
@@ -129,7 +130,8 @@ class JsonReader {
     for (std::size_t i = 0; i < j->size(); ++i) {
       const Json& e = (*j)[i];
       const std::string p = Child(key) + "/" + std::to_string(i);
-      if (!e.is_object()) throw ConfigError(file_, p, "expected an object, got " + DescribeValue(e));
+      if (!e.is_object())
+        throw ConfigError(file_, p, "expected an object, got " + DescribeValue(e));
       JsonReader child(e, file_, p);
       Visit(child, out[i]);
       child.Finish();
@@ -175,7 +177,8 @@ class JsonReader {
 
  private:
   const Json* Find(const char* key);
-  double ReadNumber(const char* key, const Json& j, Rule r, bool integer, const std::string& at) const;
+  double ReadNumber(const char* key, const Json& j, Rule r, bool integer,
+                    const std::string& at) const;
   void CheckSize(const char* key, std::size_t n, std::size_t min_size, std::size_t max_size) const;
 
   const Json& node_;
@@ -270,7 +273,8 @@ Json ToJson(const T& config) {
 
 template <class T>
 void FromJson(const Json& j, const std::string& file, const std::string& pointer, T& config) {
-  if (!j.is_object()) throw ConfigError(file, pointer, "expected an object, got " + DescribeValue(j));
+  if (!j.is_object())
+    throw ConfigError(file, pointer, "expected an object, got " + DescribeValue(j));
   JsonReader r(j, file, pointer);
   Visit(r, config);
   r.Finish();
@@ -278,7 +282,7 @@ void FromJson(const Json& j, const std::string& file, const std::string& pointer
 
 // Explicit instantiation of a struct's Visit for both directions; use in the
 // .cpp that defines the template.
-#define UAVSIM_INSTANTIATE_VISIT(Type)                              \
+#define UAVSIM_INSTANTIATE_VISIT(Type)                     \
   template void Visit(::uavsim::core::JsonReader&, Type&); \
   template void Visit(::uavsim::core::JsonWriter&, Type&)
 

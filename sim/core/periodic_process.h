@@ -26,8 +26,8 @@
 #include <cstdint>
 #include <functional>
 
-#include "sim/core/simulator.h"
 #include "sim/core/rng.h"
+#include "sim/core/simulator.h"
 #include "sim/core/time.h"
 
 namespace uavsim::core {

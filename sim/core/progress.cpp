@@ -35,7 +35,8 @@ void Progress::Finish() {
 }
 
 void Progress::Draw(double done) {
-  const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  const double elapsed =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
   const double frac = total_ > 0 ? std::clamp(done / total_, 0.0, 1.0) : 1.0;
   const double rate = elapsed > 0 ? done / elapsed : 0.0;
   const double eta = rate > 0 ? (total_ - done) / rate : 0.0;
@@ -44,8 +45,8 @@ void Progress::Draw(double done) {
   char bar[kWidth + 1];
   for (int i = 0; i < kWidth; ++i) bar[i] = i < filled ? '#' : '.';
   bar[kWidth] = 0;
-  std::fprintf(stderr, "\r%s [%s] %5.1f%%  %.3g %s/s  ETA %4.0fs ", label_.c_str(), bar, 100.0 * frac, rate,
-               unit_.c_str(), eta);
+  std::fprintf(stderr, "\r%s [%s] %5.1f%%  %.3g %s/s  ETA %4.0fs ", label_.c_str(), bar,
+               100.0 * frac, rate, unit_.c_str(), eta);
   std::fflush(stderr);
 }
 

@@ -27,10 +27,10 @@ class RngStream {
   RngStream Derive(std::string_view sub_id) const;
 
   std::uint64_t NextU64();
-  double Uniform();                        // [0, 1), 53 random bits
-  double Uniform(double lo, double hi);    // [lo, hi)
+  double Uniform();                           // [0, 1), 53 random bits
+  double Uniform(double lo, double hi);       // [lo, hi)
   std::uint64_t UniformInt(std::uint64_t n);  // [0, n), unbiased; n > 0
-  double Normal();                         // standard normal (Marsaglia polar)
+  double Normal();                            // standard normal (Marsaglia polar)
   double Normal(double mean, double stddev);
   double Exponential(double mean);
   double Pareto(double scale, double shape);  // x >= scale, P(X > x) = (scale/x)^shape

@@ -6,7 +6,8 @@ namespace uavsim::core {
 
 template <class V>
 void Visit(V& v, WeatherConfig& c) {
-  v("rain_mm_h", c.rain_mm_h, Rule::NonNegative(300.0));  // 300 mm/h exceeds any recorded hourly rate
+  v("rain_mm_h", c.rain_mm_h,
+    Rule::NonNegative(300.0));  // 300 mm/h exceeds any recorded hourly rate
   v("fog_visibility_m", c.fog_visibility_m, Rule{1.0, 1e5, false, false});
   v("illumination", c.illumination, Rule::Range(0.0, 10.0));
 }

@@ -6,7 +6,8 @@ namespace uavsim::core {
 
 template <class V>
 void Visit(V& v, CityConfig& c) {
-  v.Enum("type", c.type, {{"open", CityType::kOpen}, {"grid", CityType::kGrid}, {"mesh", CityType::kMesh}});
+  v.Enum("type", c.type,
+         {{"open", CityType::kOpen}, {"grid", CityType::kGrid}, {"mesh", CityType::kMesh}});
   switch (c.type) {
     case CityType::kOpen:
       break;

@@ -3,8 +3,8 @@
 #include <catch2/catch.hpp>
 #include <filesystem>
 
-#include "cli_runner.h"
 #include "results/csv.h"
+#include "test_support.h"
 
 namespace fs = std::filesystem;
 using uavsim::results::RunDirectory;

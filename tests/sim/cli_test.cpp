@@ -10,8 +10,8 @@
 #include <sstream>
 #include <thread>
 
-#include "cli_runner.h"
 #include "sim/core/json_io.h"
+#include "test_support.h"
 
 namespace fs = std::filesystem;
 using uavsim::core::Json;
@@ -23,7 +23,9 @@ using uavsim::testing::WriteFile;
 namespace {
 const std::string kDefault = std::string(UAVSIM_SOURCE_DIR) + "/scenarios/default.json";
 
-std::size_t CountLines(const std::string& s) { return static_cast<std::size_t>(std::count(s.begin(), s.end(), '\n')); }
+std::size_t CountLines(const std::string& s) {
+  return static_cast<std::size_t>(std::count(s.begin(), s.end(), '\n'));
+}
 
 // The run files with the wall-clock fields removed.
 Json WithoutWallClock(Json j) {
@@ -48,10 +50,16 @@ TEST_CASE("CLI: --version, --help and every subcommand's --help", "[sim]") {
 }
 
 TEST_CASE("CLI: usage errors exit 2 with one line", "[sim]") {
-  for (const auto& args : std::vector<std::vector<std::string>>{
-           {"frobnicate"}, {"run"}, {"run", kDefault, "--bogus"}, {"validate", kDefault, kDefault},
-           {"run", kDefault, "--seed", "-3"}, {"run", kDefault, "--duration", "abc"},
-           {"run", kDefault, "--record", "sonar"}, {"run", kDefault, "--out"}, {"bench", "nothing"}}) {
+  for (const auto& args :
+       std::vector<std::vector<std::string>>{{"frobnicate"},
+                                             {"run"},
+                                             {"run", kDefault, "--bogus"},
+                                             {"validate", kDefault, kDefault},
+                                             {"run", kDefault, "--seed", "-3"},
+                                             {"run", kDefault, "--duration", "abc"},
+                                             {"run", kDefault, "--record", "sonar"},
+                                             {"run", kDefault, "--out"},
+                                             {"bench", "nothing"}}) {
     auto r = RunCli(args);
     INFO(args.front() << " ... " << r.err);
     CHECK(r.exit_code == 2);
@@ -79,7 +87,8 @@ TEST_CASE("CLI: validate accepts the default scenario and {} ", "[sim]") {
   CHECK(Json::parse(resolved.out)["pipeline"]["window_s"] == 0.2);
   auto set = RunCli({"validate", dir + "/empty.json", "--set", "/links/default/loss/p=2"});
   CHECK(set.exit_code == 2);
-  CHECK(set.err == dir + "/empty.json: /links/default/loss/p: expected a number in [0, 1], got 2\n");
+  CHECK(set.err ==
+        dir + "/empty.json: /links/default/loss/p: expected a number in [0, 1], got 2\n");
   auto missing = RunCli({"validate", dir + "/nope.json"});
   CHECK(missing.exit_code == 2);
   CHECK(missing.err == dir + "/nope.json: cannot read file: No such file or directory\n");
@@ -91,7 +100,8 @@ TEST_CASE("CLI: run writes the run directory of DESIGN.md", "[sim]") {
   REQUIRE(r.exit_code == 0);
   CHECK(r.out.empty());
   CHECK(r.err.empty());
-  for (const char* f : {"manifest.json", "truth.csv", "metrics.json"}) CHECK(fs::exists(out + "/" + f));
+  for (const char* f : {"manifest.json", "truth.csv", "metrics.json"})
+    CHECK(fs::exists(out + "/" + f));
 
   const std::string truth = ReadFile(out + "/truth.csv");
   CHECK_THAT(truth, Catch::StartsWith("t_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps\n0.000000,"));
@@ -117,11 +127,14 @@ TEST_CASE("CLI: run writes the run directory of DESIGN.md", "[sim]") {
   auto again = RunCli({"run", kDefault, "--out", out, "--quiet"});
   CHECK(again.exit_code == 2);
   CHECK_THAT(again.err, Catch::Contains("already exists"));
-  CHECK(RunCli({"run", kDefault, "--out", out, "--quiet", "--force", "--duration", "2"}).exit_code == 0);
+  CHECK(
+      RunCli({"run", kDefault, "--out", out, "--quiet", "--force", "--duration", "2"}).exit_code ==
+      0);
   CHECK(CountLines(ReadFile(out + "/truth.csv")) == 1 + 2 * 20);
 }
 
-TEST_CASE("CLI: the same scenario and seed give byte-identical files; another seed differs", "[sim]") {
+TEST_CASE("CLI: the same scenario and seed give byte-identical files; another seed differs",
+          "[sim]") {
   const std::string dir = TempDir("determinism");
   // A random trajectory and clock jitter: everything that draws random numbers.
   WriteFile(dir + "/s.json", R"({
@@ -147,15 +160,16 @@ TEST_CASE("CLI: the same scenario and seed give byte-identical files; another se
 TEST_CASE("CLI: a killed run leaves nothing under its final name", "[sim]") {
   const std::string dir = TempDir("killed");
   // A long run with a cheap world: nothing but the truth timer at a high rate.
-  WriteFile(dir + "/long.json", R"({"duration_s": 86400, "nodes": [], "outputs": {"truth_rate_hz": 100}})");
+  WriteFile(dir + "/long.json",
+            R"({"duration_s": 86400, "nodes": [], "outputs": {"truth_rate_hz": 100}})");
   for (int sig : {SIGKILL, SIGTERM}) {
     const std::string out = dir + "/out" + std::to_string(sig);
     const pid_t pid = fork();
     if (pid == 0) {
       const int devnull = open("/dev/null", O_WRONLY);
       dup2(devnull, 1), dup2(devnull, 2);
-      execl(UAVSIM_CLI, UAVSIM_CLI, "run", (dir + "/long.json").c_str(), "--out", out.c_str(), "--quiet",
-            static_cast<char*>(nullptr));
+      execl(UAVSIM_CLI, UAVSIM_CLI, "run", (dir + "/long.json").c_str(), "--out", out.c_str(),
+            "--quiet", static_cast<char*>(nullptr));
       _exit(127);
     }
     // Wait until the run is under way (its staging folder exists), then kill it.
@@ -181,6 +195,7 @@ TEST_CASE("CLI: a killed run leaves nothing under its final name", "[sim]") {
   for (auto& e : fs::directory_iterator(dir)) {
     const std::string name = e.path().filename().string();
     INFO(name);
-    CHECK((name == "long.json" || name.rfind(".out" + std::to_string(SIGKILL) + ".partial-", 0) == 0));
+    CHECK((name == "long.json" ||
+           name.rfind(".out" + std::to_string(SIGKILL) + ".partial-", 0) == 0));
   }
 }

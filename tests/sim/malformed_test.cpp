@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "tests/cli_runner.h"
+#include "tests/test_support.h"
 
 namespace {
 

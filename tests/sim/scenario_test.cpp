@@ -3,7 +3,7 @@
 #include <catch2/catch.hpp>
 #include <filesystem>
 
-#include "cli_runner.h"
+#include "test_support.h"
 
 using uavsim::core::ConfigError;
 using uavsim::core::Json;
@@ -13,15 +13,9 @@ using uavsim::sim::ResolvedJson;
 using uavsim::sim::Scenario;
 using uavsim::sim::ScenarioFromJson;
 
+using uavsim::testing::ConfigErrorOf;
+
 namespace {
-std::string ErrorOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const ConfigError& e) {
-    return e.what();
-  }
-  return "";
-}
 const std::string kScenarios = std::string(UAVSIM_SOURCE_DIR) + "/scenarios";
 }  // namespace
 
@@ -70,19 +64,22 @@ TEST_CASE("Scenario: --set overrides address the document by JSON pointer", "[si
   CHECK(s.uavs[0].trajectory.max_speed_mps == 4.0);
   CHECK(s.name == "bare-word");
 
-  CHECK_THAT(ErrorOf([&] { ApplyOverride(doc, "/uavs/3/id=x"); }),
+  CHECK_THAT(ConfigErrorOf([&] { ApplyOverride(doc, "/uavs/3/id=x"); }),
              Catch::StartsWith("--set: /uavs/3: no such array element"));
-  CHECK_THAT(ErrorOf([&] { ApplyOverride(doc, "/name/x=1"); }), Catch::StartsWith("--set: /name/x: cannot descend"));
-  CHECK_THAT(ErrorOf([&] { ApplyOverride(doc, "name=1"); }), Catch::Contains("expected /json/pointer=value"));
+  CHECK_THAT(ConfigErrorOf([&] { ApplyOverride(doc, "/name/x=1"); }),
+             Catch::StartsWith("--set: /name/x: cannot descend"));
+  CHECK_THAT(ConfigErrorOf([&] { ApplyOverride(doc, "name=1"); }),
+             Catch::Contains("expected /json/pointer=value"));
   // A value set out of range is reported at its pointer like any other.
   Json bad = Json::object();
   ApplyOverride(bad, "/links/default/loss/p=1.5");
-  CHECK(ErrorOf([&] { ScenarioFromJson(bad, "b.json", "."); }) ==
+  CHECK(ConfigErrorOf([&] { ScenarioFromJson(bad, "b.json", "."); }) ==
         "b.json: /links/default/loss/p: expected a number in [0, 1], got 1.5");
 }
 
 TEST_CASE("Scenario: links merge over the default map", "[sim]") {
-  const Scenario s = ScenarioFromJson(Json::parse(R"({"links": {"mmwave": {"carrier_ghz": 28}}})"), "l.json", ".");
+  const Scenario s =
+      ScenarioFromJson(Json::parse(R"({"links": {"mmwave": {"carrier_ghz": 28}}})"), "l.json", ".");
   CHECK(s.links.size() == 2);
   CHECK(s.links.at("mmwave").carrier_ghz.value() == 28.0);
   CHECK(s.links.at("default").bandwidth_mbps == 20.0);
@@ -105,11 +102,14 @@ TEST_CASE("Scenario: resource estimate is the closed-form ray count", "[sim]") {
 }
 
 TEST_CASE("Scenario: the resource guard refuses absurd work and says what it would cost", "[sim]") {
-  Json doc = Json::parse(R"({"nodes": [{"id": "c", "sensor": {"type": "fisheye_stereo", "width_px": 8192,
+  Json doc =
+      Json::parse(R"({"nodes": [{"id": "c", "sensor": {"type": "fisheye_stereo", "width_px": 8192,
       "height_px": 8192, "cx_px": 4096, "cy_px": 4096, "rate_hz": 1000}}]})");
-  const std::string e = ErrorOf([&] { ScenarioFromJson(doc, "g.json", "."); });
-  CHECK(e == "g.json: /nodes/0/sensor: refused: the sensors would cast 1.34e+11 rays per simulated second "
-             "(this one 1.34e+11); the limit is 2e+09");
+  const std::string e = ConfigErrorOf([&] { ScenarioFromJson(doc, "g.json", "."); });
+  CHECK(
+      e ==
+      "g.json: /nodes/0/sensor: refused: the sensors would cast 1.34e+11 rays per simulated second "
+      "(this one 1.34e+11); the limit is 2e+09");
 }
 
 TEST_CASE("Scenario: a mesh city's file is resolved against the scenario's folder", "[sim]") {
@@ -117,6 +117,6 @@ TEST_CASE("Scenario: a mesh city's file is resolved against the scenario's folde
   uavsim::testing::WriteFile(dir + "/city.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
   const Json doc = Json::parse(R"({"world": {"city": {"type": "mesh", "path": "city.obj"}}})");
   CHECK_NOTHROW(ScenarioFromJson(doc, dir + "/s.json", dir));
-  CHECK_THAT(ErrorOf([&] { ScenarioFromJson(doc, "s.json", "/nonexistent"); }),
+  CHECK_THAT(ConfigErrorOf([&] { ScenarioFromJson(doc, "s.json", "/nonexistent"); }),
              Catch::StartsWith("s.json: /world/city/path: file not found: /nonexistent/city.obj"));
 }

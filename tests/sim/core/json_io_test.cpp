@@ -2,6 +2,8 @@
 
 #include <catch2/catch.hpp>
 
+#include "test_support.h"
+
 #include "sim/core/weather.h"
 #include "sim/scenario.h"
 
@@ -10,35 +12,29 @@ using uavsim::core::Json;
 using uavsim::core::ParseJsonText;
 using uavsim::core::Rule;
 
-namespace {
-std::string ErrorOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const ConfigError& e) {
-    return e.what();
-  }
-  return "";
-}
-}  // namespace
+using uavsim::testing::ConfigErrorOf;
 
 TEST_CASE("JsonIo: syntax errors give line and column", "[core]") {
-  const std::string e = ErrorOf([] { ParseJsonText("{\n  \"a\": 1,\n  \"b\": }\n", "s.json"); });
+  const std::string e =
+      ConfigErrorOf([] { ParseJsonText("{\n  \"a\": 1,\n  \"b\": }\n", "s.json"); });
   CHECK_THAT(e, Catch::StartsWith("s.json: line 3, column 8: invalid JSON"));
 }
 
 TEST_CASE("JsonIo: duplicate keys are errors at their pointer", "[core]") {
-  CHECK(ErrorOf([] { ParseJsonText(R"({"a": {"b": 1, "b": 2}})", "d.json"); }) ==
+  CHECK(ConfigErrorOf([] { ParseJsonText(R"({"a": {"b": 1, "b": 2}})", "d.json"); }) ==
         "d.json: /a/b: duplicate key \"b\"");
-  CHECK(ErrorOf([] { ParseJsonText(R"({"x": [1, {"k": 1, "k": 2}]})", "d.json"); }) ==
+  CHECK(ConfigErrorOf([] { ParseJsonText(R"({"x": [1, {"k": 1, "k": 2}]})", "d.json"); }) ==
         "d.json: /x/1/k: duplicate key \"k\"");
   // Same key in two different objects is fine.
-  CHECK(ErrorOf([] { ParseJsonText(R"({"a": {"k": 1}, "b": {"k": 2}, "c": [{"k": 1}, {"k": 2}]})", "d.json"); })
-            .empty());
+  CHECK(ConfigErrorOf([] {
+          ParseJsonText(R"({"a": {"k": 1}, "b": {"k": 2}, "c": [{"k": 1}, {"k": 2}]})", "d.json");
+        }).empty());
 }
 
 TEST_CASE("JsonIo: nesting is bounded", "[core]") {
   const std::string deep = std::string(100000, '[') + std::string(100000, ']');
-  CHECK_THAT(ErrorOf([&] { ParseJsonText(deep, "n.json"); }), Catch::Contains("nesting deeper than"));
+  CHECK_THAT(ConfigErrorOf([&] { ParseJsonText(deep, "n.json"); }),
+             Catch::Contains("nesting deeper than"));
 }
 
 TEST_CASE("JsonIo: rules describe themselves", "[core]") {
@@ -54,16 +50,19 @@ TEST_CASE("JsonIo: the reader names the pointer, the rule and the value", "[core
   using uavsim::core::WeatherConfig;
   WeatherConfig w;
   auto load = [&](const char* text) {
-    return ErrorOf([&] { uavsim::core::FromJson(Json::parse(text), "w.json", "/weather", w); });
+    return ConfigErrorOf(
+        [&] { uavsim::core::FromJson(Json::parse(text), "w.json", "/weather", w); });
   };
-  CHECK(load(R"({"rain_mm_h": -1})") == "w.json: /weather/rain_mm_h: expected a number in [0, 300], got -1");
+  CHECK(load(R"({"rain_mm_h": -1})") ==
+        "w.json: /weather/rain_mm_h: expected a number in [0, 300], got -1");
   CHECK(load(R"({"rain_mm_h": "heavy"})") ==
         "w.json: /weather/rain_mm_h: expected a number in [0, 300], got \"heavy\"");
-  CHECK(ErrorOf([] { ParseJsonText(R"({"weather": {"rain_mm_h": 1e999}})", "w.json"); }) ==
+  CHECK(ConfigErrorOf([] { ParseJsonText(R"({"weather": {"rain_mm_h": 1e999}})", "w.json"); }) ==
         "w.json: /weather/rain_mm_h: expected a finite number, got 1e999 (out of range)");
-  CHECK(ErrorOf([] { ParseJsonText(R"({"p": [1, 2, -1e400]})", "w.json"); }) ==
+  CHECK(ConfigErrorOf([] { ParseJsonText(R"({"p": [1, 2, -1e400]})", "w.json"); }) ==
         "w.json: /p/2: expected a finite number, got -1e400 (out of range)");
-  CHECK(load(R"({"rain_mmh": 3})") == "w.json: /weather/rain_mmh: unknown key (did you mean \"rain_mm_h\"?)");
+  CHECK(load(R"({"rain_mmh": 3})") ==
+        "w.json: /weather/rain_mmh: unknown key (did you mean \"rain_mm_h\"?)");
   CHECK_THAT(load(R"({"zzzzzzzzzz": 3})"), Catch::Contains("unknown key; known keys here:"));
   CHECK(load(R"({"fog_visibility_m": null, "illumination": 0.5})").empty());
   CHECK_FALSE(w.fog_visibility_m.has_value());

@@ -8,8 +8,8 @@
 #include <utility>
 #include <vector>
 
-#include "sim/core/simulator.h"
 #include "sim/core/rng.h"
+#include "sim/core/simulator.h"
 #include "sim/core/time.h"
 
 namespace {

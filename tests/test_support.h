@@ -1,6 +1,8 @@
-// Runs the uavsim binary built beside the tests and captures what it says.
+// Test helpers: run the uavsim binary built beside the tests and capture what
+// it says; temporary folders; the message of a ConfigError.
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -21,5 +23,8 @@ std::string TempDir(const std::string& tag);
 
 std::string ReadFile(const std::string& path);
 void WriteFile(const std::string& path, const std::string& content);
+
+// The what() of the core::ConfigError that `f` throws, or "" if none.
+std::string ConfigErrorOf(const std::function<void()>& f);
 
 }  // namespace uavsim::testing

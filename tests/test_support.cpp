@@ -1,4 +1,4 @@
-#include "cli_runner.h"
+#include "test_support.h"
 
 #include <fcntl.h>
 #include <sys/wait.h>
@@ -8,6 +8,8 @@
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
+
+#include "sim/core/error.h"
 
 namespace uavsim::testing {
 namespace fs = std::filesystem;
@@ -87,6 +89,15 @@ void WriteFile(const std::string& path, const std::string& content) {
   std::ofstream out(path, std::ios::binary);
   out << content;
   if (!out) throw std::runtime_error("cannot write " + path);
+}
+
+std::string ConfigErrorOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const core::ConfigError& e) {
+    return e.what();
+  }
+  return "";
 }
 
 }  // namespace uavsim::testing
