@@ -21,6 +21,7 @@ void Visit(V& v, CityConfig& c) {
       v("max_height_m", c.max_height_m, Rule::Range(1.0, 1000.0));
       v.Check(c.min_height_m <= c.max_height_m, "max_height_m",
               "max_height_m must be >= min_height_m (" + FormatNumber(c.min_height_m) + ")");
+      v("central_plaza", c.central_plaza);
       v("poles", c.poles);
       v("trees", c.trees);
       break;

@@ -21,6 +21,7 @@ struct CityConfig {
   int buildings_per_block = 4;
   double min_height_m = 8.0;
   double max_height_m = 30.0;
+  bool central_plaza = true;  // leave the centre block open (where the default UAV flies)
   bool poles = true;
   bool trees = true;
   // mesh: OBJ or PLY path, relative to the scenario file's folder.

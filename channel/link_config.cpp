@@ -1,4 +1,3 @@
-#include "channel/base_station_config.h"
 #include "channel/link_config.h"
 #include "sim/core/json_io.h"
 
@@ -73,21 +72,5 @@ void Visit(V& v, LinkConfig& c) {
   v.Array("outages", c.outages, 0, 10000);
 }
 UAVSIM_INSTANTIATE_VISIT(LinkConfig);
-
-template <class V>
-void Visit(V& v, UpaConfig& c) {
-  v("mx", c.mx, Rule::Range(1, 1024));
-  v("my", c.my, Rule::Range(1, 1024));
-  v("spacing_wavelengths", c.spacing_wavelengths, Rule::Positive(10.0));
-}
-UAVSIM_INSTANTIATE_VISIT(UpaConfig);
-
-template <class V>
-void Visit(V& v, BaseStationConfig& c) {
-  v("position_m", c.position_m, Rule::Range(-1e6, 1e6));
-  v.Object("upa", c.upa);
-  v("carrier_ghz", c.carrier_ghz, Rule::Range(0.1, 1000.0));
-}
-UAVSIM_INSTANTIATE_VISIT(BaseStationConfig);
 
 }  // namespace uavsim::channel

@@ -1,0 +1,76 @@
+// The one owner of Embree (version 3). Holds the static world in one BVH,
+// built once, and each moving object (UAV, bird) as an instance of its own
+// small BVH; SetTime() moves the instances by their pose functions and
+// re-commits only the top level (no rebuild of the city).
+//
+// Thread safety: Intersect/Occluded may be called from many threads at once;
+// SetTime and AddMovingObject may not run concurrently with anything.
+// Errors reported by Embree are thrown as std::runtime_error.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <memory>
+#include <vector>
+
+#include "sim/core/world_geometry.h"
+
+namespace uavsim::sensors {
+
+struct Ray {
+  Eigen::Vector3f origin_m = Eigen::Vector3f::Zero();
+  Eigen::Vector3f direction = Eigen::Vector3f::UnitX();  // need not be unit; t is in its lengths
+  float t_min = 0.0f;
+  float t_max = std::numeric_limits<float>::infinity();
+};
+
+struct RayHit {
+  float t = std::numeric_limits<float>::infinity();  // distance along the ray, in direction lengths
+  Eigen::Vector3f normal_w = Eigen::Vector3f::Zero();  // unit geometric normal, world frame, facing the ray
+  std::int32_t object = -1;  // -1: miss; 0: static world; k >= 1: moving object k (AddMovingObject's id)
+  std::uint32_t material = 0;
+  bool hit() const { return object >= 0; }
+};
+
+class RaycastScene {
+ public:
+  using PoseFunction = std::function<Eigen::Isometry3d(double t_s)>;  // X_WO at time t
+
+  explicit RaycastScene(const core::WorldGeometry& world);
+  ~RaycastScene();
+  RaycastScene(const RaycastScene&) = delete;
+  RaycastScene& operator=(const RaycastScene&) = delete;
+
+  // Adds a moving object: `mesh` in its own body frame, posed by `X_WO(t)`.
+  // Returns its id (1, 2, ...). Takes effect at the next SetTime.
+  int AddMovingObject(const core::TriangleMesh& mesh, PoseFunction X_WO);
+
+  // Poses every moving object at t_s and commits the top-level BVH.
+  void SetTime(double t_s);
+  double time_s() const { return time_s_; }
+
+  // Closest hit along one ray (rtcIntersect1).
+  RayHit Intersect(const Ray& ray) const;
+  // Closest hits of many rays: coherent rays go through Embree's packet API
+  // (groups of 8); hits[i] answers rays[i].
+  void IntersectMany(const Ray* rays, RayHit* hits, std::size_t count) const;
+  // True if anything blocks the segment from a to b (ends excluded by `eps_m`).
+  bool Occluded(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double eps_m = 1e-3) const;
+
+  const core::Material& material(std::uint32_t index) const { return materials_[index]; }
+  std::size_t moving_object_count() const { return poses_.size(); }
+  std::size_t static_triangle_count() const { return static_triangles_; }
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  std::vector<core::Material> materials_;
+  std::vector<PoseFunction> poses_;
+  std::size_t static_triangles_ = 0;
+  double time_s_ = 0.0;
+};
+
+}  // namespace uavsim::sensors
