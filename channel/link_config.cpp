@@ -1,4 +1,7 @@
 #include "channel/link_config.h"
+
+#include <algorithm>
+
 #include "sim/core/json_io.h"
 
 namespace uavsim::channel {
@@ -55,6 +58,7 @@ template <class V>
 void Visit(V& v, OutageConfig& c) {
   v("from_s", c.from_s, Rule::NonNegative(1e7));
   v("to_s", c.to_s, Rule::NonNegative(1e7));
+  v("nodes", c.nodes);
   v.Check(c.from_s < c.to_s, "to_s",
           "to_s must be after from_s (" + core::FormatNumber(c.from_s) + ")");
 }
@@ -67,10 +71,44 @@ void Visit(V& v, LinkConfig& c) {
   v.Object("jitter", c.jitter);
   v.Object("loss", c.loss);
   v("mtu_bytes", c.mtu_bytes, Rule::Range(64, 65535));
+  v("fragment_header_bytes", c.fragment_header_bytes, Rule::Range(0, 1024));
+  v.Check(
+      c.fragment_header_bytes < c.mtu_bytes, "fragment_header_bytes",
+      "fragment_header_bytes must be less than mtu_bytes (" + std::to_string(c.mtu_bytes) + ")");
   v("buffer_packets", c.buffer_packets, Rule::Range(1, 10000000));
-  v("carrier_ghz", c.carrier_ghz, Rule{0.1, 1000.0, false, false});
+  v("snr_db", c.snr_db, Rule::Range(-50.0, 100.0));
+  v.Enum("modulation", c.modulation,
+         {{"bpsk", Modulation::kBpsk},
+          {"qpsk", Modulation::kQpsk},
+          {"16qam", Modulation::kQam16},
+          {"64qam", Modulation::kQam64},
+          {"256qam", Modulation::kQam256}});
+  v("coding_gain_db", c.coding_gain_db, Rule::Range(0.0, 20.0));
+  v("carrier_ghz", c.carrier_ghz, Rule::Range(1.0, 1000.0));
+  v("path_length_m", c.path_length_m, Rule::NonNegative(100000.0));
+  v.Enum("polarization", c.polarization,
+         {{"horizontal", Polarization::kHorizontal},
+          {"vertical", Polarization::kVertical},
+          {"circular", Polarization::kCircular}});
+  v("path_elevation_deg", c.path_elevation_deg, Rule::Range(0.0, 90.0));
   v.Array("outages", c.outages, 0, 10000);
 }
 UAVSIM_INSTANTIATE_VISIT(LinkConfig);
+
+void CheckOutageNodes(const LinkConfig& link, const std::vector<std::string>& node_ids,
+                      const std::string& file, const std::string& link_pointer) {
+  for (std::size_t i = 0; i < link.outages.size(); ++i) {
+    const auto& nodes = link.outages[i].nodes;
+    for (std::size_t j = 0; j < nodes.size(); ++j) {
+      if (std::find(node_ids.begin(), node_ids.end(), nodes[j]) != node_ids.end()) continue;
+      std::string known;
+      for (const auto& id : node_ids) known += (known.empty() ? "\"" : ", \"") + id + "\"";
+      throw core::ConfigError(
+          file, link_pointer + "/outages/" + std::to_string(i) + "/nodes/" + std::to_string(j),
+          "node " + core::DescribeValue(core::Json(nodes[j])) + " does not use this link (" +
+              (known.empty() ? std::string("no node uses it") : "its nodes: " + known) + ")");
+    }
+  }
+}
 
 }  // namespace uavsim::channel

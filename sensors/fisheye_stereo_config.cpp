@@ -27,6 +27,13 @@ void Visit(V& v, FisheyeStereoConfig& c) {
   v("p2", c.p2, Rule::Range(-1.0, 1.0));
   v("k3", c.k3, Rule::Range(-10.0, 10.0));
   v("baseline_m", c.baseline_m, Rule::Positive(10.0));
+  v("sun_azimuth_deg", c.sun_azimuth_deg, Rule::Range(-360.0, 360.0));
+  v("sun_elevation_deg", c.sun_elevation_deg, Rule::Range(-90.0, 90.0));
+  v("exposure", c.exposure, Rule::Positive(1e4));
+  v("full_well_e", c.full_well_e, Rule::Range(1.0, 1e7));
+  v("read_noise_e", c.read_noise_e, Rule::NonNegative(1e4));
+  v("gamma", c.gamma, Rule::Range(1.0, 3.0));
+  v("sensor_noise", c.sensor_noise);
 }
 UAVSIM_INSTANTIATE_VISIT(FisheyeStereoConfig);
 

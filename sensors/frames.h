@@ -24,7 +24,7 @@ struct StereoFrame {
 
 struct LidarPoint {
   float x_m, y_m, z_m;  // world frame
-  float intensity;      // [0, 1]: received power relative to a white target at the same range
+  float intensity;      // [0, 1]: received power, normalised (falls as 1/R^2; see lidar.h)
   float t_offset_s;     // time of this point after the frame's start
 };
 

@@ -1,11 +1,13 @@
 #include "sensors/lidar_config.h"
 
 #include <cmath>
+#include <string>
 
 #include "sim/core/json_io.h"
 
 namespace uavsim::sensors {
 
+using core::FormatNumber;
 using core::Rule;
 
 double LidarConfig::RaysPerFrame() const {
@@ -25,6 +27,13 @@ void Visit(V& v, LidarConfig& c) {
     v("vertical_max_deg", c.vertical_max_deg, Rule::Range(-90.0, 90.0));
     v.Check(c.vertical_min_deg < c.vertical_max_deg, "vertical_max_deg",
             "vertical_max_deg must be above vertical_min_deg");
+    v("vertical_angles_deg", c.vertical_angles_deg, Rule::Range(-90.0, 90.0), 0, 128);
+    v.Check(c.vertical_angles_deg.empty() ||
+                static_cast<int>(c.vertical_angles_deg.size()) == c.channels,
+            "vertical_angles_deg",
+            "vertical_angles_deg has " + std::to_string(c.vertical_angles_deg.size()) +
+                " angles but channels is " + std::to_string(c.channels) +
+                " (give one angle per channel, or none)");
     v("azimuth_resolution_deg", c.azimuth_resolution_deg, Rule::Range(0.001, 45.0));
   } else {
     v("points_per_s", c.points_per_s, Rule::Positive(1e9));
@@ -33,6 +42,20 @@ void Visit(V& v, LidarConfig& c) {
   v("max_range_m", c.max_range_m, Rule::Positive(10000.0));
   v("range_noise_m", c.range_noise_m, Rule::NonNegative(10.0));
   v("dropout", c.dropout, Rule{0.0, 1.0, false, true});
+  v("reference_reflectivity", c.reference_reflectivity, Rule{0.0, 1.0, true, false});
+  v("min_range_m", c.min_range_m, Rule::NonNegative(1000.0));
+  v("full_overlap_range_m", c.full_overlap_range_m, Rule::NonNegative(1000.0));
+  v.Check(
+      c.full_overlap_range_m >= c.min_range_m, "full_overlap_range_m",
+      "full_overlap_range_m must be at least min_range_m (" + FormatNumber(c.min_range_m) + " m)");
+  v.Check(c.full_overlap_range_m < c.max_range_m, "full_overlap_range_m",
+          "full_overlap_range_m must be below max_range_m (" + FormatNumber(c.max_range_m) + " m)");
+  v("saturation_range_m", c.saturation_range_m, Rule::Positive(10000.0));
+  v("pulse_width_ns", c.pulse_width_ns, Rule::Positive(1000.0));
+  v("beam_divergence_mrad", c.beam_divergence_mrad, Rule::Positive(100.0));
+  v.Enum("return_mode", c.return_mode,
+         {{"strongest", LidarReturnMode::kStrongest}, {"last", LidarReturnMode::kLast}});
+  v("time_slices_per_frame", c.time_slices_per_frame, Rule::Range(1, 100000));
 }
 UAVSIM_INSTANTIATE_VISIT(LidarConfig);
 

@@ -2,6 +2,7 @@
 // are caught here once: one line on stderr, exit code 2.
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -14,7 +15,10 @@
 #include <string>
 #include <vector>
 
+#include "sim/bench_beam.h"
 #include "sim/bench_events.h"
+#include "sim/bench_link.h"
+#include "sim/bench_raycast.h"
 #include "sim/core/error.h"
 #include "sim/run.h"
 #include "sim/scenario.h"
@@ -41,7 +45,7 @@ const char* kMainHelp =
     "  run SCENARIO.json          run a scenario and write its run directory\n"
     "  sweep SPEC.json            run a grid of scenarios (packet loss x weather x seeds)\n"
     "  train SCENARIO.json        train the UAVLoc model by simulation\n"
-    "  bench [raycast|events|pipeline|all]   measure the hot paths\n"
+    "  bench [raycast|events|link|beam|pipeline|all]   measure the hot paths\n"
     "\n"
     "options: --help (also after a command), --version, --quiet (every command)\n"
     "exit codes: 0 ok, 1 failure while running, 2 bad input or usage, 130 interrupted\n";
@@ -88,12 +92,15 @@ const char* kTrainHelp =
     "then TE-Align, MADW, MICA and Mamba) with LibTorch on the CPU.\n";
 
 const char* kBenchHelp =
-    "usage: uavsim bench [raycast|events|pipeline|all] [--quiet]\n"
+    "usage: uavsim bench [raycast|events|link|beam|pipeline|all] [--quiet]\n"
     "\n"
+    "  raycast    Embree rtcIntersect1 throughput vs each sensor's rays per second in the\n"
+    "             default city; the camera's packet speed-up; camera + LiDAR real-time factor\n"
     "  events     the event core: hold model (pop earliest, schedule one at a random delay)\n"
     "             with 1e3..1e6 pending events; events per second\n"
-    "  raycast    Embree throughput and each sensor's rays per second\n"
-    "  pipeline   node encoders and edge inference\n"
+    "  link       messages per second through one uplink under the event core\n"
+    "  beam       downlink beam evaluations per second (channel, steering, gain)\n"
+    "  pipeline   node encoders and edge inference (arrives with the UAVLoc pipeline)\n"
     "  all        everything available (default)\n";
 
 // Flags of one command: name -> takes a value.
@@ -233,19 +240,28 @@ int Bench(int argc, char** argv) {
   if (a.positional.size() > 1)
     throw UsageError("uavsim bench: expected at most one target (see uavsim bench --help)");
   const std::string what = a.positional.empty() ? "all" : a.positional[0];
-  if (what == "events" || what == "all") {
-    const int rc = uavsim::sim::BenchEvents(a.Has("--quiet"), std::cout);
-    if (what == "events" || rc != 0) return rc;
-    std::cout << "raycast: not available yet (arrives with the Embree world and sensors)\n"
-              << "pipeline: not available yet (arrives with the UAVLoc pipeline)\n";
-    return kExitOk;
-  }
-  if (what == "raycast" || what == "pipeline") {
-    std::cerr << "uavsim bench " << what << ": not available yet\n";
+  const bool quiet = a.Has("--quiet");
+  const std::vector<std::pair<std::string, std::function<int()>>> targets{
+      {"raycast", [&] { return uavsim::sim::BenchRaycast(quiet, std::cout); }},
+      {"events", [&] { return uavsim::sim::BenchEvents(quiet, std::cout); }},
+      {"link", [&] { return uavsim::sim::BenchLink(quiet, std::cout); }},
+      {"beam", [&] { return uavsim::sim::BenchBeam(quiet, std::cout); }},
+  };
+  if (what == "pipeline") {
+    std::cerr << "uavsim bench pipeline: not available yet (arrives with the UAVLoc pipeline)\n";
     return kExitBadInput;
   }
-  throw UsageError("uavsim bench: unknown target '" + what +
-                   "' (raycast, events, pipeline or all)");
+  int rc = kExitOk;
+  bool found = false;
+  for (const auto& [name, run] : targets) {
+    if (what != "all" && what != name) continue;
+    found = true;
+    if (what == "all") std::cout << "== " << name << "\n";
+    rc = std::max(rc, run());
+  }
+  if (!found)
+    throw UsageError("uavsim bench: unknown target '" + what + "' (raycast, events, link, beam, pipeline or all)");
+  return rc;
 }
 
 int Main(int argc, char** argv) {

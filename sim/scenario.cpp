@@ -171,10 +171,15 @@ void CheckScenario(const Scenario& s, const std::string& file) {
                             "\" in /links (known: " + (known.empty() ? "none" : known) + ")");
     }
   }
-  for (const auto& [name, link] : s.links)
+  for (const auto& [name, link] : s.links) {
     if (!IsValidId(name))
       throw ConfigError(file, "/links/" + core::EscapePointerToken(name),
                         "expected a link name of 1 to 64 letters, digits, '_' or '-'");
+    std::vector<std::string> users;
+    for (const NodeConfig& n : s.nodes)
+      if (n.uplink == name) users.push_back(n.id);
+    channel::CheckOutageNodes(link, users, file, "/links/" + name);
+  }
   if (s.pipeline.model != "default")
     RequireFile(file, "/pipeline/model", s.base_dir, s.pipeline.model);
   if (s.world.city.type == core::CityType::kMesh) {

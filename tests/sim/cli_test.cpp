@@ -96,7 +96,8 @@ TEST_CASE("CLI: validate accepts the default scenario and {} ", "[sim]") {
 
 TEST_CASE("CLI: run writes the run directory of DESIGN.md", "[sim]") {
   const std::string out = TempDir("run") + "/r";
-  auto r = RunCli({"run", kDefault, "--out", out, "--quiet"});
+  // 3 s of the default scenario: every sensor renders, every link carries.
+  auto r = RunCli({"run", kDefault, "--out", out, "--quiet", "--duration", "3"});
   REQUIRE(r.exit_code == 0);
   CHECK(r.out.empty());
   CHECK(r.err.empty());
@@ -105,17 +106,29 @@ TEST_CASE("CLI: run writes the run directory of DESIGN.md", "[sim]") {
 
   const std::string truth = ReadFile(out + "/truth.csv");
   CHECK_THAT(truth, Catch::StartsWith("t_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps\n0.000000,"));
-  CHECK(CountLines(truth) == 1 + 60 * 20);  // header + 60 s at 20 Hz, end exclusive
+  CHECK(CountLines(truth) == 1 + 3 * 20);  // header + 3 s at 20 Hz, end exclusive
 
   const Json metrics = Json::parse(ReadFile(out + "/metrics.json"));
-  CHECK(metrics["sim_s"] == 60.0);
+  CHECK(metrics["sim_s"] == 3.0);
   CHECK(metrics["wall_s"].get<double>() > 0.0);
   CHECK(metrics["realtime_factor"].get<double>() > 0.0);
   CHECK(metrics["rmse_m"].is_object());
-  // Frame timers at the paper's rates over 60 s.
-  CHECK(metrics["modalities"]["camera"]["frames"] == 1800);
-  CHECK(metrics["modalities"]["lidar"]["frames"] == 600);
-  CHECK(metrics["modalities"]["radar"]["frames"] == 900);
+  // Frame timers at the paper's rates over 3 s.
+  CHECK(metrics["modalities"]["camera"]["frames"] == 90);
+  CHECK(metrics["modalities"]["lidar"]["frames"] == 30);
+  CHECK(metrics["modalities"]["radar"]["frames"] == 45);
+  // Every frame is one message on a lossless link: all delivered on time.
+  for (const char* m : {"camera", "lidar", "radar"}) {
+    INFO(m);
+    const Json& mod = metrics["modalities"][m];
+    CHECK(mod["packets_sent"] == mod["frames"]);
+    CHECK(mod["packets_delivered"] == mod["frames"]);
+    CHECK(mod["packets_lost"] == 0);
+    CHECK(mod["latency_s"]["p50"].get<double>() > 0.005);  // 5 ms latency plus serialization
+  }
+  // Raw camera data rate: two 640 x 480 8-bit images at 30 Hz.
+  CHECK(metrics["data_rate_kBps"]["camera"]["raw"].get<double>() == Approx(2 * 640 * 480 * 30 / 1000.0));
+  CHECK(ReadFile(out + "/rate_snr.csv").rfind("snr_db,beam,rate_bps_hz\n", 0) == 0);
 
   const Json manifest = Json::parse(ReadFile(out + "/manifest.json"));
   CHECK(manifest["seed"] == 1);
@@ -138,7 +151,7 @@ TEST_CASE("CLI: the same scenario and seed give byte-identical files; another se
   const std::string dir = TempDir("determinism");
   // A random trajectory and clock jitter: everything that draws random numbers.
   WriteFile(dir + "/s.json", R"({
-    "duration_s": 20,
+    "duration_s": 2,
     "uavs": [{"id": "target", "trajectory": {"type": "random"}}],
     "nodes": [{"id": "cam", "sensor": {"type": "fisheye_stereo", "clock_jitter_s": 0.001}},
               {"id": "lid", "sensor": {"type": "lidar", "phase_s": 0.05, "clock_jitter_s": 0.002}}]

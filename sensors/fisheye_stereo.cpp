@@ -1,0 +1,326 @@
+#include "sensors/fisheye_stereo.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace uavsim::sensors {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// Radiometry in units of the 8-bit full scale at exposure 1. A white
+// surface facing a 45-degree sun would sit just above full scale, so the
+// sunlit 0.35-albedo concrete of the city lands mid-grey and the sky a bit
+// brighter, as an auto-exposed daytime camera shows them.
+constexpr double kSunRadiance = 0.9;       // white Lambertian surface facing the sun
+constexpr double kSkyAmbient = 0.45;       // white surface under the whole sky (mean sky radiance)
+constexpr double kGroundAlbedo = 0.15;     // what down-facing surfaces see (ground bounce)
+constexpr double kSkyZenith = 0.35;        // blue zenith: darker than the horizon
+constexpr double kSkyHorizon = 0.75;       // hazy horizon; also the airlight of fog and rain
+constexpr double kStreakBrightness = 1.3;  // a drop refracts the bright sky: streaks x airlight
+
+// Koschmieder: visibility is where contrast falls to 2 %: beta = -ln(0.02) / V.
+constexpr double kKoschmieder = 3.912;
+
+// Rain extinction in the visible and near infrared: the empirical law of
+// free-space-optics link budgets, 1.076 R^0.67 dB/km with R in mm/h (after
+// Carbonneau, 1998), converted to 1/m. Rain scatters far less than fog
+// (25 mm/h: 2.1e-3 /m, a "visibility" of about 1.8 km).
+double RainExtinctionPerM(double rain_mm_h) {
+  if (rain_mm_h <= 0.0) return 0.0;
+  const double db_per_km = 1.076 * std::pow(rain_mm_h, 0.67);
+  return db_per_km * std::log(10.0) / 10.0 / 1000.0;
+}
+
+// Sky radiance by elevation: a vertical gradient from the bright horizon
+// to the darker zenith. Below the horizon (past the edge of the ground
+// plane) the horizon value continues.
+double SkyRadiance(double direction_z) {
+  const double s = 1.0 - std::clamp(direction_z, 0.0, 1.0);
+  return kSkyZenith + (kSkyHorizon - kSkyZenith) * s * s;
+}
+
+// Optical frame C in the body frame B (REP 103): z_C = x_B, x_C = -y_B,
+// y_C = -z_B; the columns are C's axes written in B.
+Eigen::Matrix3d R_BC() {
+  Eigen::Matrix3d R;
+  R << 0, 0, 1,  //
+      -1, 0, 0,  //
+      0, -1, 0;
+  return R;
+}
+
+}  // namespace
+
+struct FisheyeStereo::Light {
+  double gain = 1.0;
+  double beta_per_m = 0.0;  // extinction of fog and rain together
+  double airlight = 0.0;    // radiance of the scattering medium, gain included
+};
+
+struct FisheyeStereo::Streak {
+  double u0, v0, v1;  // top point and bottom row, pixels
+  double du_dv;       // slant
+  double alpha;       // opacity
+};
+
+FisheyeStereo::FisheyeStereo(const FisheyeStereoConfig& config, const RaycastScene& scene)
+    : config_(config), scene_(scene), model_(config), table_(model_.ComputeRayTable()) {
+  X_WC_[0] = config_.pose.ToIsometry();
+  X_WC_[0].linear() = X_WC_[0].linear() * R_BC();
+  X_WC_[1] = X_WC_[0] * Eigen::Translation3d(config_.baseline_m, 0.0, 0.0);
+
+  const int w = table_.width_px, h = table_.height_px;
+  const Eigen::Matrix3f R_WC = X_WC_[0].linear().cast<float>();
+  row_begin_.reserve(h + 1);
+  direction_W_.reserve(table_.valid_count);
+  column_.reserve(table_.valid_count);
+  for (int v = 0; v < h; ++v) {
+    row_begin_.push_back(static_cast<std::uint32_t>(direction_W_.size()));
+    for (int u = 0; u < w; ++u) {
+      const std::size_t i = static_cast<std::size_t>(v) * w + u;
+      if (!table_.valid[i]) continue;
+      direction_W_.push_back((R_WC * table_.direction_C[i]).normalized());
+      column_.push_back(static_cast<std::uint16_t>(u));
+    }
+  }
+  row_begin_.push_back(static_cast<std::uint32_t>(direction_W_.size()));
+
+  const double az = config_.sun_azimuth_deg * kPi / 180.0;
+  const double el = config_.sun_elevation_deg * kPi / 180.0;
+  sun_W_ = Eigen::Vector3d(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el))
+               .cast<float>();
+  sun_up_ = config_.sun_elevation_deg > 0.0;
+
+  encode_.resize(65536);
+  for (std::size_t i = 0; i < encode_.size(); ++i)
+    encode_[i] = static_cast<std::uint8_t>(
+        std::lround(255.0 * std::pow(static_cast<double>(i) / 65535.0, 1.0 / config_.gamma)));
+}
+
+std::vector<Ray> FisheyeStereo::WorldRays(Eye eye) const {
+  const Eigen::Vector3f origin = X_WC(eye).translation().cast<float>();
+  std::vector<Ray> rays(direction_W_.size());
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    rays[i].origin_m = origin;
+    rays[i].direction = direction_W_[i];
+  }
+  return rays;
+}
+
+FisheyeStereo::Light FisheyeStereo::FrameLight(const core::WeatherConfig& weather) const {
+  Light light;
+  light.gain = weather.illumination * config_.exposure;
+  if (weather.fog_visibility_m) light.beta_per_m += kKoschmieder / *weather.fog_visibility_m;
+  light.beta_per_m += RainExtinctionPerM(weather.rain_mm_h);
+  light.airlight = light.gain * kSkyHorizon;
+  return light;
+}
+
+std::vector<FisheyeStereo::Streak> FisheyeStereo::RainStreaks(double rain_mm_h,
+                                                              core::RngStream rng) const {
+  std::vector<Streak> streaks;
+  if (rain_mm_h <= 0.0) return streaks;
+  // Drops within a metre or so of the lens, blurred over the exposure: about
+  // one streak per mm/h in a 640 x 480 frame, a few at drizzle and dozens in
+  // a downpour.
+  const int w = table_.width_px, h = table_.height_px;
+  const double expected = rain_mm_h * (static_cast<double>(w) * h) / (640.0 * 480.0);
+  const auto count = static_cast<std::size_t>(std::min(expected + rng.Uniform(), 5000.0));
+  for (std::size_t k = 0; k < count; ++k) {
+    Streak s;
+    s.u0 = rng.Uniform(0.0, w);
+    s.v0 = rng.Uniform(-0.1 * h, h);
+    s.v1 = s.v0 + rng.Uniform(0.04, 0.12) * h;
+    s.du_dv = std::tan(rng.Normal(0.1, 0.05));  // falling with a light wind
+    s.alpha = rng.Uniform(0.15, 0.35);
+    streaks.push_back(s);
+  }
+  return streaks;
+}
+
+std::vector<FisheyeStereo::PixelBox> FisheyeStereo::SubsampledBoxes(
+    int eye, const std::vector<BoundingSphere>& spheres) const {
+  std::vector<PixelBox> boxes;
+  const Eigen::Isometry3d X_CW = X_WC_[eye].inverse();
+  for (const BoundingSphere& sphere : spheres) {
+    const Eigen::Vector3d c_C = X_CW * sphere.center_m;
+    const double distance_m = c_C.norm();
+    if (!(distance_m > sphere.radius_m) || sphere.radius_m <= 0.0) continue;
+    // The sphere's image: the centre and 16 points of its silhouette cone.
+    const Eigen::Vector3d axis = c_C / distance_m;
+    const Eigen::Vector3d e1 = axis.unitOrthogonal(), e2 = axis.cross(e1);
+    const double sin_a = sphere.radius_m / distance_m, cos_a = std::sqrt(1.0 - sin_a * sin_a);
+    Eigen::AlignedBox2d image;
+    if (const auto px = model_.Project(axis)) image.extend(*px);
+    for (int k = 0; k < 16; ++k) {
+      const double phi = 2.0 * kPi * k / 16.0;
+      const Eigen::Vector3d edge = cos_a * axis + sin_a * (std::cos(phi) * e1 + std::sin(phi) * e2);
+      if (const auto px = model_.Project(edge)) image.extend(*px);
+    }
+    if (image.isEmpty()) continue;
+    if (image.sizes().maxCoeff() > kMaxSubsampledSpanPx) continue;
+    // One pixel of margin: the 16 points under-sample the silhouette's
+    // curvature, and the pixel's own half-width reaches past its centre.
+    PixelBox box;
+    box.u0 = std::max(0, static_cast<int>(std::floor(image.min().x() - 1.0)));
+    box.v0 = std::max(0, static_cast<int>(std::floor(image.min().y() - 1.0)));
+    box.u1 = std::min(table_.width_px - 1, static_cast<int>(std::ceil(image.max().x() + 1.0)));
+    box.v1 = std::min(table_.height_px - 1, static_cast<int>(std::ceil(image.max().y() + 1.0)));
+    boxes.push_back(box);
+  }
+  return boxes;
+}
+
+float FisheyeStereo::SubsampledRadiance(int eye, int u, int v, const Light& light,
+                                        std::vector<Ray>& rays, std::vector<RayHit>& hits) const {
+  const Eigen::Matrix3d& R_WC = X_WC_[eye].linear();
+  const Eigen::Vector3f origin = X_WC_[eye].translation().cast<float>();
+  rays.clear();
+  for (int j = 0; j < kSubsamples; ++j) {
+    for (int i = 0; i < kSubsamples; ++i) {
+      const Eigen::Vector3d d_C =
+          model_.Unproject(u - 0.5 + (i + 0.5) / kSubsamples, v - 0.5 + (j + 0.5) / kSubsamples);
+      if (d_C.isZero()) continue;
+      Ray ray;
+      ray.origin_m = origin;
+      ray.direction = (R_WC * d_C).cast<float>();
+      rays.push_back(ray);
+    }
+  }
+  hits.resize(rays.size());
+  scene_.IntersectMany(rays.data(), hits.data(), rays.size());
+  double sum = 0.0;
+  for (std::size_t k = 0; k < rays.size(); ++k) sum += Radiance(hits[k], rays[k].direction, light);
+  return static_cast<float>(sum / static_cast<double>(std::max<std::size_t>(1, rays.size())));
+}
+
+float FisheyeStereo::Radiance(const RayHit& hit, const Eigen::Vector3f& direction_W,
+                              const Light& light) const {
+  if (!hit.hit()) {
+    if (light.beta_per_m > 0.0) return static_cast<float>(light.airlight);
+    return static_cast<float>(light.gain * SkyRadiance(direction_W.z()));
+  }
+  const double albedo = scene_.material(hit.material).albedo;
+  const Eigen::Vector3f& n = hit.normal_w;
+  const double sun = sun_up_ ? kSunRadiance * std::max(0.0f, n.dot(sun_W_)) : 0.0;
+  const double sky = kSkyAmbient * (0.5 * (1.0 + n.z()) + kGroundAlbedo * 0.5 * (1.0 - n.z()));
+  double L = light.gain * albedo * (sun + sky);
+  if (light.beta_per_m > 0.0) {
+    const double transmittance = std::exp(-light.beta_per_m * hit.t);
+    L = L * transmittance + light.airlight * (1.0 - transmittance);
+  }
+  return static_cast<float>(L);
+}
+
+void FisheyeStereo::RenderRow(int eye, int v, const Light& light,
+                              const std::vector<Streak>& streaks,
+                              const std::vector<PixelBox>& boxes, std::uint64_t frame_key,
+                              std::vector<Ray>& rays, std::vector<RayHit>& hits,
+                              std::vector<float>& radiance, std::uint8_t* out) const {
+  const int w = table_.width_px;
+  const std::uint32_t begin = row_begin_[v], end = row_begin_[v + 1];
+  const std::size_t n = end - begin;
+  const Eigen::Vector3f origin = X_WC_[eye].translation().cast<float>();
+  rays.resize(n);
+  hits.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    rays[i].origin_m = origin;
+    rays[i].direction = direction_W_[begin + i];
+  }
+  // One row of a fisheye image is a coherent fan of rays: Embree's packets
+  // traverse it faster than single rays.
+  scene_.IntersectMany(rays.data(), hits.data(), n);
+
+  radiance.assign(w, 0.0f);
+  for (std::size_t i = 0; i < n; ++i)
+    radiance[column_[begin + i]] = Radiance(hits[i], direction_W_[begin + i], light);
+
+  const std::uint8_t* valid = &table_.valid[static_cast<std::size_t>(v) * w];
+  // Overlapping boxes must not integrate a pixel twice: the first box
+  // covering a column takes it.
+  int done_until = -1;
+  for (const PixelBox& box : boxes) {
+    if (v < box.v0 || v > box.v1) continue;
+    for (int u = std::max(box.u0, done_until + 1); u <= box.u1; ++u)
+      if (valid[u]) radiance[u] = SubsampledRadiance(eye, u, v, light, rays, hits);
+    done_until = std::max(done_until, box.u1);
+  }
+
+  const float streak_radiance = static_cast<float>(kStreakBrightness * light.airlight);
+  for (const Streak& s : streaks) {
+    if (v < s.v0 || v > s.v1) continue;
+    const long u = std::lround(s.u0 + (v - s.v0) * s.du_dv);
+    if (u < 0 || u >= w || !valid[u]) continue;
+    radiance[u] += static_cast<float>(s.alpha) * (streak_radiance - radiance[u]);
+  }
+
+  // The noise of each row comes from its own stream, keyed by frame, eye and
+  // row, so threads may render rows in any order.
+  core::RngStream rng(
+      core::Mix64(frame_key ^ core::Mix64((static_cast<std::uint64_t>(eye) << 32) | v)));
+  const double full_well = config_.full_well_e;
+  const double read_variance = config_.read_noise_e * config_.read_noise_e;
+  for (int u = 0; u < w; ++u) {
+    if (!valid[u]) {
+      out[u] = 0;
+      continue;
+    }
+    double electrons = static_cast<double>(radiance[u]) * full_well;
+    if (config_.sensor_noise)
+      electrons += std::sqrt(std::max(electrons, 0.0) + read_variance) * rng.Normal();
+    const double x = std::clamp(electrons / full_well, 0.0, 1.0);
+    out[u] = encode_[static_cast<std::size_t>(x * 65535.0 + 0.5)];
+  }
+}
+
+StereoFrame FisheyeStereo::Capture(double t_s, const core::WeatherConfig& weather,
+                                   core::RngStream& noise) const {
+  const std::uint64_t frame_key = noise.NextU64();
+  const core::RngStream frame_rng(frame_key);
+  const Light light = FrameLight(weather);
+  const std::vector<Streak> streaks[2] = {
+      RainStreaks(weather.rain_mm_h, frame_rng.Derive("rain/left")),
+      RainStreaks(weather.rain_mm_h, frame_rng.Derive("rain/right"))};
+  const std::vector<BoundingSphere> spheres =
+      small_objects_ ? small_objects_(t_s) : std::vector<BoundingSphere>{};
+  std::vector<PixelBox> boxes[2] = {SubsampledBoxes(0, spheres), SubsampledBoxes(1, spheres)};
+  // Sorted by first column, so RenderRow can skip columns already done.
+  for (auto& b : boxes)
+    std::sort(b.begin(), b.end(), [](const PixelBox& a, const PixelBox& c) { return a.u0 < c.u0; });
+
+  const int w = table_.width_px, h = table_.height_px;
+  StereoFrame frame;
+  frame.t_capture_s = t_s;
+  GrayImage* images[2] = {&frame.left, &frame.right};
+  for (GrayImage* image : images) {
+    image->width = w;
+    image->height = h;
+    image->pixels.assign(static_cast<std::size_t>(w) * h, 0);
+  }
+
+  auto render = [&](const tbb::blocked_range<int>& rows) {
+    std::vector<Ray> rays;
+    std::vector<RayHit> hits;
+    std::vector<float> radiance;
+    for (int r = rows.begin(); r != rows.end(); ++r) {
+      const int eye = r / h, v = r % h;
+      RenderRow(eye, v, light, streaks[eye], boxes[eye], frame_key, rays, hits, radiance,
+                &images[eye]->pixels[static_cast<std::size_t>(v) * w]);
+    }
+  };
+  const tbb::blocked_range<int> all_rows(0, 2 * h, 2);
+  if (max_threads_ > 0) {
+    tbb::task_arena arena(max_threads_);
+    arena.execute([&] { tbb::parallel_for(all_rows, render); });
+  } else {
+    tbb::parallel_for(all_rows, render);
+  }
+  return frame;
+}
+
+}  // namespace uavsim::sensors

@@ -1,0 +1,137 @@
+// The stereo fisheye camera: two global-shutter eyes with the same Mei
+// intrinsics (fisheye_model.h), one Embree ray per pixel through the exact
+// inverse of the model, shaded into 8-bit grey images.
+//
+// Frames: the config's pose is the rig's body frame B (REP 103, x forward);
+// each eye's optical frame C has x_C = -y_B, y_C = -z_B, z_C = x_B. The left
+// eye sits at the pose, the right eye baseline_m along +x_C (to the right).
+// Pixel (u, v) of an image sees along the ray of ray_table() at (u, v).
+//
+// Image formation (linear radiance, full scale = 1 at exposure 1):
+//   hit:  L = gain * albedo * (0.9 max(0, n.s) + 0.45 ((1 + n_z)/2 + 0.15 (1 - n_z)/2))
+//         (Lambertian sun of direction s from the config, sky ambient over
+//         the upper hemisphere, ground bounce of albedo 0.15 over the lower;
+//         n the world normal facing the camera, albedo the material's)
+//   miss: L = gain * sky(z), sky(z) = 0.35 + 0.4 (1 - z)^2 for the ray's
+//         world z component (0.75 at the horizon, 0.35 at the zenith)
+//   gain = weather.illumination * exposure (night, 0.01, is dark and noisy)
+//   fog/rain (Koschmieder): beta = 3.912 / visibility_m + beta_rain(rain_mm_h),
+//         L <- L e^(-beta d) + A (1 - e^(-beta d)), A = gain * sky(horizon),
+//         d the hit distance in metres; misses become A (d = infinity)
+//   rain: a few streaks a frame (about rain_mm_h per eye at 640 x 480)
+//   sensor: N = L * full_well_e electrons, N + sqrt(N + read_noise_e^2) * z
+//         (shot noise with variance N, Gaussian read noise), clipped to full
+//         well, then 255 * (N / full_well_e)^(1/gamma), rounded
+// Pixels outside the lens's valid domain are 0.
+//
+// Small objects: one ray per pixel centre would let a UAV 70 m away (under
+// two pixels across) slip between the samples or flicker from frame to
+// frame. A real pixel integrates over its area, so the pixels around the
+// image of each sphere that set_small_objects reports are integrated with
+// kSubsamples x kSubsamples stratified rays (objects whose image spans more
+// than kMaxSubsampledSpanPx pixels are resolved by the pixel centres alone).
+//
+// Determinism: Capture draws exactly one 64-bit value from `noise`; every
+// pixel's noise comes from a stream derived from (that value, eye, row), so
+// the images are the same whatever the number of threads.
+// Threads: Capture runs tbb::parallel_for over rows; it may run concurrently
+// with other const calls on the same scene (the scene must not be posed
+// meanwhile). The scene must outlive the camera.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <functional>
+#include <utility>
+#include <vector>
+
+#include "sensors/fisheye_model.h"
+#include "sensors/fisheye_stereo_config.h"
+#include "sensors/frames.h"
+#include "sensors/raycast_scene.h"
+#include "sim/core/rng.h"
+#include "sim/core/weather.h"
+
+namespace uavsim::sensors {
+
+// A moving object's bounding sphere in the world frame (ENU, metres).
+struct BoundingSphere {
+  Eigen::Vector3d center_m = Eigen::Vector3d::Zero();
+  double radius_m = 0.0;
+};
+
+class FisheyeStereo {
+ public:
+  enum class Eye { kLeft = 0, kRight = 1 };
+  // The moving objects' bounding spheres at time t_s (e.g. each UAV's
+  // position and half its size_m diagonal).
+  using SmallObjectsFunction = std::function<std::vector<BoundingSphere>(double t_s)>;
+
+  static constexpr int kSubsamples = 4;
+  static constexpr int kMaxSubsampledSpanPx = 24;
+
+  // Computes the per-pixel ray table once (about 0.15 s for 640 x 480).
+  FisheyeStereo(const FisheyeStereoConfig& config, const RaycastScene& scene);
+
+  // Renders both eyes of the scene as it is posed now (the caller has called
+  // scene.SetTime(t_s)); t_s is stamped on the frame.
+  StereoFrame Capture(double t_s, const core::WeatherConfig& weather, core::RngStream& noise) const;
+
+  // Objects whose pixels Capture integrates over their area (see above);
+  // called once per Capture with its t_s. Unset: pixel centres only.
+  void set_small_objects(SmallObjectsFunction small_objects) {
+    small_objects_ = std::move(small_objects);
+  }
+
+  // At most `max_threads` threads for Capture (0: TBB's default, all cores).
+  // Does not change the images.
+  void set_max_threads(int max_threads) { max_threads_ = max_threads; }
+  int max_threads() const { return max_threads_; }
+
+  const FisheyeStereoConfig& config() const { return config_; }
+  const FisheyeModel& model() const { return model_; }
+  const RayTable& ray_table() const { return table_; }  // both eyes share the intrinsics
+  // Pose of an eye's optical frame in the world.
+  const Eigen::Isometry3d& X_WC(Eye eye) const { return X_WC_[static_cast<int>(eye)]; }
+  // The world-frame rays Capture casts for one eye (valid pixels, row-major),
+  // for benchmarks that time the same rays through other APIs.
+  std::vector<Ray> WorldRays(Eye eye) const;
+  // Rays cast per Capture: the valid pixels of both eyes.
+  std::size_t rays_per_frame() const { return 2 * table_.valid_count; }
+
+ private:
+  struct Light;
+  struct Streak;
+  struct PixelBox {
+    int u0, v0, u1, v1;  // inclusive
+  };
+
+  Light FrameLight(const core::WeatherConfig& weather) const;
+  std::vector<Streak> RainStreaks(double rain_mm_h, core::RngStream rng) const;
+  std::vector<PixelBox> SubsampledBoxes(int eye, const std::vector<BoundingSphere>& spheres) const;
+  float SubsampledRadiance(int eye, int u, int v, const Light& light, std::vector<Ray>& rays,
+                           std::vector<RayHit>& hits) const;
+  float Radiance(const RayHit& hit, const Eigen::Vector3f& direction_W, const Light& light) const;
+  void RenderRow(int eye, int v, const Light& light, const std::vector<Streak>& streaks,
+                 const std::vector<PixelBox>& boxes, std::uint64_t frame_key,
+                 std::vector<Ray>& rays, std::vector<RayHit>& hits, std::vector<float>& radiance,
+                 std::uint8_t* out) const;
+
+  FisheyeStereoConfig config_;
+  const RaycastScene& scene_;
+  FisheyeModel model_;
+  RayTable table_;
+  Eigen::Isometry3d X_WC_[2];
+  // The valid pixels' directions in the world frame, row by row: row v holds
+  // entries row_begin_[v] .. row_begin_[v + 1] - 1, at columns column_[i].
+  std::vector<Eigen::Vector3f> direction_W_;
+  std::vector<std::uint32_t> row_begin_;
+  std::vector<std::uint16_t> column_;
+  Eigen::Vector3f sun_W_;
+  bool sun_up_;
+  std::vector<std::uint8_t> encode_;  // linear [0, 1] in 65536 steps -> gamma-encoded 8 bits
+  SmallObjectsFunction small_objects_;
+  int max_threads_ = 0;
+};
+
+}  // namespace uavsim::sensors
