@@ -31,8 +31,8 @@ struct LidarPoint {
 struct PointCloudFrame {
   double t_start_s = 0.0;  // start of the sweep; each point carries its own offset
   std::vector<LidarPoint> points;
-  std::size_t rays_cast = 0;     // beams fired in this frame
-  std::size_t spurious = 0;      // of the points, returns from fog/rain backscatter
+  std::size_t rays_cast = 0;  // beams fired in this frame
+  std::size_t spurious = 0;   // of the points, returns from fog/rain backscatter
   std::size_t RawBytes() const { return points.size() * 5 * sizeof(float); }
 };
 

@@ -29,8 +29,10 @@ struct Ray {
 
 struct RayHit {
   float t = std::numeric_limits<float>::infinity();  // distance along the ray, in direction lengths
-  Eigen::Vector3f normal_w = Eigen::Vector3f::Zero();  // unit geometric normal, world frame, facing the ray
-  std::int32_t object = -1;  // -1: miss; 0: static world; k >= 1: moving object k (AddMovingObject's id)
+  Eigen::Vector3f normal_w =
+      Eigen::Vector3f::Zero();  // unit geometric normal, world frame, facing the ray
+  std::int32_t object =
+      -1;  // -1: miss; 0: static world; k >= 1: moving object k (AddMovingObject's id)
   std::uint32_t material = 0;
   bool hit() const { return object >= 0; }
 };

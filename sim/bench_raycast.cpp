@@ -3,8 +3,8 @@
 #include <tbb/global_control.h>
 
 #include <chrono>
-#include <memory>
 #include <iomanip>
+#include <memory>
 #include <sstream>
 #include <vector>
 
@@ -75,7 +75,8 @@ int BenchRaycast(bool quiet, std::ostream& out) {
 
   // Single-thread figures (global_control takes the smallest active limit, so
   // this one must end before the 2-thread measurement).
-  auto one_thread = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, 1);
+  auto one_thread =
+      std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, 1);
 
   // Camera rays: raw single rays vs packets, then the full Capture.
   const std::vector<sensors::Ray> cam_rays = camera.WorldRays(sensors::FisheyeStereo::Eye::kLeft);

@@ -260,7 +260,8 @@ int Bench(int argc, char** argv) {
     rc = std::max(rc, run());
   }
   if (!found)
-    throw UsageError("uavsim bench: unknown target '" + what + "' (raycast, events, link, beam, pipeline or all)");
+    throw UsageError("uavsim bench: unknown target '" + what +
+                     "' (raycast, events, link, beam, pipeline or all)");
   return rc;
 }
 

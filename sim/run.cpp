@@ -72,6 +72,11 @@ void InstallInterruptHandlers() {
 }
 
 RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
+  for (const std::string& m : o.record)
+    if (m == "radar")
+      throw core::UsageError(
+          "uavsim run: --record radar: not available yet (it arrives with the FMCW radar signal "
+          "chain)");
   const auto wall_start = std::chrono::steady_clock::now();
   const std::string started_utc = UtcNow();
   results::RunDirectory dir(o.out_dir, o.force);

@@ -66,7 +66,8 @@ struct WorldGeometry {
 // from `rng` (the world's own stream). A mesh city is read from
 // config.city.path relative to `base_dir` (OBJ or PLY), scaled and offset;
 // throws ConfigError naming "/world/city/path" if it cannot be read.
-WorldGeometry BuildWorldGeometry(const WorldConfig& config, const std::string& base_dir, RngStream rng);
+WorldGeometry BuildWorldGeometry(const WorldConfig& config, const std::string& base_dir,
+                                 RngStream rng);
 
 // A quadrotor-like mesh (body, four arms, four rotor discs) centred on the
 // origin, filling the box size_m (x forward, y left, z up).

@@ -18,8 +18,10 @@ TriangleMesh Box(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi, std::uint
   m.name = "box";
   m.material = material;
   for (int i = 0; i < 8; ++i)
-    m.vertices_m.emplace_back(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(), i & 4 ? hi.z() : lo.z());
-  const std::uint32_t q[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+    m.vertices_m.emplace_back(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(),
+                              i & 4 ? hi.z() : lo.z());
+  const std::uint32_t q[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                                 {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
   for (const auto& f : q) {
     m.triangles.push_back({f[0], f[1], f[2]});
     m.triangles.push_back({f[0], f[2], f[3]});
@@ -35,7 +37,8 @@ WorldGeometry GroundAndWall() {
   ground.vertices_m = {{-100, -100, 0}, {100, -100, 0}, {100, 100, 0}, {-100, 100, 0}};
   ground.triangles = {{0, 1, 2}, {0, 2, 3}};
   w.meshes.push_back(ground);
-  w.meshes.push_back(Box({20, -10, 0}, {22, 10, 15}, uavsim::core::kMaterialConcrete));  // a wall at x = 20
+  w.meshes.push_back(
+      Box({20, -10, 0}, {22, 10, 15}, uavsim::core::kMaterialConcrete));  // a wall at x = 20
   return w;
 }
 
@@ -81,9 +84,10 @@ TEST_CASE("RaycastScene: packets give exactly the single-ray answers", "[sensors
   for (auto& r : rays) {
     r.origin_m = {static_cast<float>(rng.Uniform(-5, 5)), static_cast<float>(rng.Uniform(-5, 5)),
                   static_cast<float>(rng.Uniform(0.5, 10))};
-    r.direction = Eigen::Vector3f(static_cast<float>(rng.Normal()), static_cast<float>(rng.Normal()),
-                                  static_cast<float>(rng.Normal()))
-                      .normalized();
+    r.direction =
+        Eigen::Vector3f(static_cast<float>(rng.Normal()), static_cast<float>(rng.Normal()),
+                        static_cast<float>(rng.Normal()))
+            .normalized();
   }
   std::vector<uavsim::sensors::RayHit> many(rays.size());
   scene.IntersectMany(rays.data(), many.data(), rays.size());
@@ -103,20 +107,20 @@ TEST_CASE("RaycastScene: packets give exactly the single-ray answers", "[sensors
 TEST_CASE("RaycastScene: a moving object follows its pose function", "[sensors]") {
   RaycastScene scene(GroundAndWall());
   // A 1 m cube moving along +y at 2 m/s, centred at z = 5.
-  const int id = scene.AddMovingObject(Box({-0.5f, -0.5f, -0.5f}, {0.5f, 0.5f, 0.5f}, uavsim::core::kMaterialDrone),
-                                       [](double t) {
-                                         Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
-                                         X.translation() = Eigen::Vector3d(10, 2 * t, 5);
-                                         X.linear() = Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-                                         return X;
-                                       });
+  const int id = scene.AddMovingObject(
+      Box({-0.5f, -0.5f, -0.5f}, {0.5f, 0.5f, 0.5f}, uavsim::core::kMaterialDrone), [](double t) {
+        Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+        X.translation() = Eigen::Vector3d(10, 2 * t, 5);
+        X.linear() = Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+        return X;
+      });
   CHECK(id == 1);
   Ray r;
   r.origin_m = {10, 4, 0.5f};
   r.direction = {0, 0, 1};
   scene.SetTime(0.0);
   CHECK_FALSE(scene.Intersect(r).hit());  // the cube is at y = 0
-  scene.SetTime(2.0);                      // now at y = 4, right above the origin of r
+  scene.SetTime(2.0);                     // now at y = 4, right above the origin of r
   const auto h = scene.Intersect(r);
   REQUIRE(h.hit());
   CHECK(h.object == id);

@@ -127,7 +127,8 @@ TEST_CASE("CLI: run writes the run directory of DESIGN.md", "[sim]") {
     CHECK(mod["latency_s"]["p50"].get<double>() > 0.005);  // 5 ms latency plus serialization
   }
   // Raw camera data rate: two 640 x 480 8-bit images at 30 Hz.
-  CHECK(metrics["data_rate_kBps"]["camera"]["raw"].get<double>() == Approx(2 * 640 * 480 * 30 / 1000.0));
+  CHECK(metrics["data_rate_kBps"]["camera"]["raw"].get<double>() ==
+        Approx(2 * 640 * 480 * 30 / 1000.0));
   CHECK(ReadFile(out + "/rate_snr.csv").rfind("snr_db,beam,rate_bps_hz\n", 0) == 0);
 
   const Json manifest = Json::parse(ReadFile(out + "/manifest.json"));

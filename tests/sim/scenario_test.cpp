@@ -92,7 +92,8 @@ TEST_CASE("Scenario: resource estimate is the closed-form ray count", "[sim]") {
   const auto& lidar = s.nodes[1].sensor.lidar;
   const auto& radar = s.nodes[2].sensor.radar;
   const double camera = 2.0 * cam.width_px * cam.height_px * 30.0;
-  const double lidar_rays = lidar.channels * std::ceil(360.0 / lidar.azimuth_resolution_deg) * 10.0;
+  REQUIRE(lidar.preset == uavsim::sensors::LidarPreset::kLivoxRosette);
+  const double lidar_rays = std::ceil(lidar.points_per_s / 10.0) * 10.0;
   const double radar_rays = std::ceil(radar.fov_azimuth_deg / radar.ray_density_deg) *
                             std::ceil(radar.fov_elevation_deg / radar.ray_density_deg) * 15.0;
   CHECK(e.rays_per_s == Approx(camera + lidar_rays + radar_rays));
