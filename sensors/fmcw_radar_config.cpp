@@ -44,6 +44,7 @@ void Visit(V& v, FmcwRadarConfig& c) {
   v("fov_azimuth_deg", c.fov_azimuth_deg, Rule{0.0, 360.0, true, false});
   v("fov_elevation_deg", c.fov_elevation_deg, Rule{0.0, 180.0, true, false});
   v("ray_density_deg", c.ray_density_deg, Rule::Range(0.001, 10.0));
+  v.Object("processing", c.processing);
 }
 UAVSIM_INSTANTIATE_VISIT(FmcwRadarConfig);
 

@@ -6,6 +6,7 @@
 #include <cstdint>
 
 #include "sensors/frame_timing.h"
+#include "sensors/radar_processing_config.h"
 #include "sim/core/pose.h"
 
 namespace uavsim::sensors {
@@ -29,7 +30,8 @@ struct FmcwRadarConfig {
   double spacing_y_wavelengths = 0.5;
   double fov_azimuth_deg = 120.0;
   double fov_elevation_deg = 60.0;
-  double ray_density_deg = 0.25;  // angular step of the scatterer-finding rays
+  double ray_density_deg = 0.25;     // angular step of the scatterer-finding rays
+  RadarProcessingConfig processing;  // "processing": the node's signal processing
 
   double RaysPerFrame() const;
   // The complex IF cube: samples x chirps x virtual antennas, complex float32.

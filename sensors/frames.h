@@ -36,4 +36,31 @@ struct PointCloudFrame {
   std::size_t RawBytes() const { return points.size() * 5 * sizeof(float); }
 };
 
+// One radar detection after CFAR and angle estimation.
+struct RadarPoint {
+  float x_m, y_m, z_m;         // world frame
+  float radial_velocity_mps;   // positive = moving away from the radar
+  float snr_db;                // of the detection cell over the CFAR noise estimate
+};
+
+// A range-Doppler power map (dB), range bins x Doppler bins, range fastest,
+// zero Doppler in the middle column; for recording and inspection.
+struct RangeDopplerMap {
+  int range_bins = 0;
+  int doppler_bins = 0;
+  double range_bin_m = 0.0;
+  double velocity_bin_mps = 0.0;
+  std::vector<float> power_db;  // index = d * range_bins + r
+};
+
+struct RadarFrame {
+  double t_capture_s = 0.0;      // start of the frame's first chirp
+  std::vector<RadarPoint> points;
+  RangeDopplerMap range_doppler;  // summed over antennas
+  std::size_t cube_bytes = 0;     // raw: the IF cube
+  std::size_t scatterers = 0;     // ray-cast scatterers that fed the cube
+  std::size_t RawBytes() const { return cube_bytes; }
+  std::size_t PointBytes() const { return points.size() * sizeof(RadarPoint); }
+};
+
 }  // namespace uavsim::sensors

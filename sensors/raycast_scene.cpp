@@ -260,6 +260,16 @@ void RaycastScene::IntersectMany(const Ray* rays, RayHit* hits, std::size_t coun
   }
 }
 
+Eigen::Vector3d RaycastScene::PointVelocity(int object, const Eigen::Vector3d& p_W,
+                                            double t_s) const {
+  if (object <= 0 || static_cast<std::size_t>(object) > poses_.size())
+    return Eigen::Vector3d::Zero();
+  constexpr double kDt = 1e-3;
+  const PoseFunction& X = poses_[static_cast<std::size_t>(object - 1)];
+  const Eigen::Vector3d p_O = X(t_s).inverse() * p_W;  // the point in the object's own frame
+  return (X(t_s + kDt) * p_O - X(t_s - kDt) * p_O) / (2.0 * kDt);
+}
+
 bool RaycastScene::Occluded(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                             double eps_m) const {
   const Eigen::Vector3d d = b - a;

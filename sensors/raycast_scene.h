@@ -62,6 +62,11 @@ class RaycastScene {
   // True if anything blocks the segment from a to b (ends excluded by `eps_m`).
   bool Occluded(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double eps_m = 1e-3) const;
 
+  // World velocity of the material point of `object` that is at p_W at time
+  // t_s (central difference of its pose function over +-1 ms); zero for the
+  // static world (object 0).
+  Eigen::Vector3d PointVelocity(int object, const Eigen::Vector3d& p_W, double t_s) const;
+
   const core::Material& material(std::uint32_t index) const { return materials_[index]; }
   std::size_t moving_object_count() const { return poses_.size(); }
   std::size_t static_triangle_count() const { return static_triangles_; }
