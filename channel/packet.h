@@ -15,6 +15,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string_view>
 #include <vector>
@@ -56,6 +57,9 @@ struct Message {
   core::SimTime t_capture_ns = 0;   // when the frame was captured
   std::uint32_t payload_bytes = 0;  // application bytes (header included), >= 1
   std::vector<float> latent;        // the IB latent; empty until the encoder lands
+  // What else the node sent (its pre-processed measurement for the edge's
+  // classical filter), opaque to the channel; payload_bytes counts it.
+  std::shared_ptr<const void> content;
 };
 
 constexpr std::uint32_t kMessageHeaderBytes = 16;

@@ -54,12 +54,6 @@
 
 namespace uavsim::sensors {
 
-// A moving object's bounding sphere in the world frame (ENU, metres).
-struct BoundingSphere {
-  Eigen::Vector3d center_m = Eigen::Vector3d::Zero();
-  double radius_m = 0.0;
-};
-
 class FisheyeStereo {
  public:
   enum class Eye { kLeft = 0, kRight = 1 };

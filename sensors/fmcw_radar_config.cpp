@@ -14,6 +14,26 @@ double FmcwRadarConfig::RaysPerFrame() const {
 }
 
 template <class V>
+void Visit(V& v, RadarSurfaceConfig& c) {
+  v("gamma_db", c.gamma_db, Rule::Range(-200.0, 20.0));
+  v("fresnel_reflectance", c.fresnel_reflectance, Rule::Probability());
+  v("rms_slope", c.rms_slope, Rule::Range(0.001, 10.0));
+}
+UAVSIM_INSTANTIATE_VISIT(RadarSurfaceConfig);
+
+template <class V>
+void Visit(V& v, RadarSurfacesConfig& c) {
+  v.Object("ground", c.ground);
+  v.Object("concrete", c.concrete);
+  v.Object("glass", c.glass);
+  v.Object("metal", c.metal);
+  v.Object("vegetation", c.vegetation);
+  v.Object("drone", c.drone);
+  v.Object("bird", c.bird);
+}
+UAVSIM_INSTANTIATE_VISIT(RadarSurfacesConfig);
+
+template <class V>
 void Visit(V& v, FmcwRadarConfig& c) {
   VisitTiming(v, c.timing);
   v.Object("pose", c.pose);
@@ -44,6 +64,18 @@ void Visit(V& v, FmcwRadarConfig& c) {
   v("fov_azimuth_deg", c.fov_azimuth_deg, Rule{0.0, 360.0, true, false});
   v("fov_elevation_deg", c.fov_elevation_deg, Rule{0.0, 180.0, true, false});
   v("ray_density_deg", c.ray_density_deg, Rule::Range(0.001, 10.0));
+  v.Object("surfaces", c.surfaces);
+  v("object_ray_spacing_m", c.object_ray_spacing_m, Rule::Range(0.001, 10.0));
+  v("merge_cell_fraction", c.merge_cell_fraction, Rule::Range(0.01, 1.0));
+  v("multipath", c.multipath);
+  v("multipath_reflection", c.multipath_reflection, Rule::Probability());
+  v("thermal_noise", c.thermal_noise);
+  v("rain_attenuation_k", c.rain_attenuation_k, Rule::NonNegative(100.0));
+  v("rain_attenuation_alpha", c.rain_attenuation_alpha, Rule::Range(0.1, 3.0));
+  v("rain_clutter", c.rain_clutter);
+  v("rain_clutter_eta_coefficient", c.rain_clutter_eta_coefficient, Rule::NonNegative(1.0));
+  v("rain_clutter_eta_exponent", c.rain_clutter_eta_exponent, Rule::Range(0.1, 3.0));
+  v("rain_clutter_min_range_m", c.rain_clutter_min_range_m, Rule::Positive(1000.0));
   v.Object("processing", c.processing);
 }
 UAVSIM_INSTANTIATE_VISIT(FmcwRadarConfig);

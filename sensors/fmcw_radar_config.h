@@ -1,6 +1,7 @@
 // FMCW radar parameters (defaults: a TI AWR1843-class 77 GHz radar). The
 // slope is bandwidth / chirp duration; the ADC samples sample_rate * the
-// sampling window; the virtual array is nx by ny elements.
+// sampling window; the virtual array is nx by ny elements. The formulas the
+// scattering, rain and noise keys enter are in sensors/fmcw_radar.h.
 #pragma once
 
 #include <cstdint>
@@ -10,6 +11,25 @@
 #include "sim/core/pose.h"
 
 namespace uavsim::sensors {
+
+// How one radar class of surface backscatters (fmcw_radar.h, "RCS"): a
+// diffuse constant-gamma term plus a geometric-optics specular lobe.
+struct RadarSurfaceConfig {
+  double gamma_db = -10.0;           // diffuse: sigma0 = gamma cos(incidence)
+  double fresnel_reflectance = 0.0;  // |Gamma(0)|^2, power reflectance at normal incidence
+  double rms_slope = 0.3;            // of the surface roughness; sets the specular lobe's width
+};
+
+// Defaults per core::RadarClass (fmcw_radar.h cites the values).
+struct RadarSurfacesConfig {
+  RadarSurfaceConfig ground{-15.0, 0.06, 0.3};
+  RadarSurfaceConfig concrete{-12.0, 0.15, 0.15};
+  RadarSurfaceConfig glass{-25.0, 0.19, 0.03};
+  RadarSurfaceConfig metal{-15.0, 1.0, 0.1};
+  RadarSurfaceConfig vegetation{-10.0, 0.0, 0.3};
+  RadarSurfaceConfig drone{-5.0, 0.0, 0.3};  // ~0.04 m^2 for the 0.5 m default quadrotor
+  RadarSurfaceConfig bird{-7.0, 0.0, 0.3};   // 0.001-0.01 m^2 for a pigeon-to-gull mesh
+};
 
 struct FmcwRadarConfig {
   FrameTiming timing{15.0};  // paper: f_r = 15 Hz
@@ -30,7 +50,38 @@ struct FmcwRadarConfig {
   double spacing_y_wavelengths = 0.5;
   double fov_azimuth_deg = 120.0;
   double fov_elevation_deg = 60.0;
-  double ray_density_deg = 0.25;     // angular step of the scatterer-finding rays
+  double ray_density_deg = 0.25;  // angular step of the scatterer-finding rays
+
+  // Scatterers (FindScatterers).
+  RadarSurfacesConfig surfaces;  // "surfaces": RCS model per radar class
+  // A ray that hits a moving object (UAV, bird) has its cell and the eight
+  // around it re-cast with rays this far apart at the hit's range (at most
+  // 64 x 64 a cell), so a small object's RCS does not depend on how the
+  // coarse grid falls on it.
+  double object_ray_spacing_m = 0.02;
+  // Scatterers are merged within cells of this fraction of the range,
+  // angle (direction cosine) and velocity resolutions.
+  double merge_cell_fraction = 1.0;
+  // Single-bounce ground multipath of moving objects (ground plane z = 0).
+  bool multipath = false;
+  double multipath_reflection = 0.3;  // |Gamma| of the ground, amplitude
+
+  // Signal (Synthesize).
+  bool thermal_noise = true;  // false: the noiseless cube (tests)
+  // Rain attenuation gamma = k R^alpha dB/km (ITU-R P.838-3 at the carrier;
+  // the defaults are for 77 GHz, horizontal polarisation: change them with
+  // carrier_ghz).
+  double rain_attenuation_k = 1.1320;
+  double rain_attenuation_alpha = 0.7177;
+  // Rain clutter: volume reflectivity eta = coefficient R^exponent m^2/m^3
+  // (R in mm/h) from rain_clutter_min_range_m out. The defaults are the Mie
+  // backscatter of Marshall-Palmer rain at 77 GHz (fmcw_radar.h); the
+  // textbook Rayleigh law at 77 GHz is 2.46e-4 R^1.6.
+  bool rain_clutter = true;
+  double rain_clutter_eta_coefficient = 4.07e-4;
+  double rain_clutter_eta_exponent = 0.79;
+  double rain_clutter_min_range_m = 1.0;
+
   RadarProcessingConfig processing;  // "processing": the node's signal processing
 
   double RaysPerFrame() const;
@@ -38,6 +89,10 @@ struct FmcwRadarConfig {
   double RawBytesPerFrame() const { return 8.0 * adc_samples * chirps_per_frame * nx * ny; }
 };
 
+template <class V>
+void Visit(V& v, RadarSurfaceConfig& c);
+template <class V>
+void Visit(V& v, RadarSurfacesConfig& c);
 template <class V>
 void Visit(V& v, FmcwRadarConfig& c);
 

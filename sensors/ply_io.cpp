@@ -15,6 +15,31 @@ void AppendFloatLe(std::string& out, float v) {
 
 }  // namespace
 
+std::string EncodePly(const RadarFrame& frame) {
+  std::ostringstream header;
+  header.precision(17);
+  header << "ply\n"
+         << "format binary_little_endian 1.0\n"
+         << "comment uavsim radar frame, world frame ENU metres, radial velocity m/s, snr dB\n"
+         << "comment t_capture_s " << frame.t_capture_s << "\n"
+         << "element vertex " << frame.points.size() << "\n"
+         << "property float x\n"
+         << "property float y\n"
+         << "property float z\n"
+         << "property float velocity\n"
+         << "property float snr\n"
+         << "end_header\n";
+  std::string out = header.str();
+  for (const RadarPoint& p : frame.points) {
+    AppendFloatLe(out, p.x_m);
+    AppendFloatLe(out, p.y_m);
+    AppendFloatLe(out, p.z_m);
+    AppendFloatLe(out, p.radial_velocity_mps);
+    AppendFloatLe(out, p.snr_db);
+  }
+  return out;
+}
+
 std::string EncodePly(const PointCloudFrame& frame) {
   std::ostringstream header;
   header.precision(17);

@@ -16,4 +16,9 @@ namespace uavsim::sensors {
 // The bytes are little-endian on any host; the result is the whole file.
 std::string EncodePly(const PointCloudFrame& frame);
 
+// A radar frame's detections, likewise: float32 x, y, z (world frame, ENU
+// metres), velocity (radial, m/s, positive receding) and snr (dB); the
+// capture time in a `comment t_capture_s ...` line.
+std::string EncodePly(const RadarFrame& frame);
+
 }  // namespace uavsim::sensors

@@ -24,7 +24,7 @@ enum class SourceCount {
 
 struct RadarProcessingConfig {
   AngleMethod angle_method = AngleMethod::kMusic;
-  bool clutter_removal = true;  // subtract the mean over chirps (zero-Doppler notch)
+  bool clutter_removal = true;  // subtract the (windowed) mean over chirps: zero-Doppler notch
   RadarWindow range_window = RadarWindow::kHann;
   RadarWindow doppler_window = RadarWindow::kHann;
   // 2-D cell-averaging CFAR on the range-Doppler map: a rectangle of
@@ -46,8 +46,9 @@ struct RadarProcessingConfig {
   SourceCount source_count = SourceCount::kOne;
   int max_sources = 2;  // with source_count "mdl"
   // MUSIC's coarse search grid over the field of view; each peak is then
-  // refined by a pattern search to 0.001 deg.
-  double music_grid_step_deg = 2.0;
+  // refined by a pattern search to 0.005 deg. Keep it well under the
+  // array's beamwidth, about 2 / N rad (29 deg for the default 4 columns).
+  double music_grid_step_deg = 4.0;
   // Beamscan: 2-D FFT of the detection cell's snapshot, zero-padded to this
   // size per axis (at least the array's size), peak bin without refinement.
   int beamscan_fft_size = 64;

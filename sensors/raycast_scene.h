@@ -37,6 +37,13 @@ struct RayHit {
   bool hit() const { return object >= 0; }
 };
 
+// A sphere enclosing a moving object (world frame, ENU metres): sensors use
+// it to sample small objects more densely than their regular ray grid.
+struct BoundingSphere {
+  Eigen::Vector3d center_m = Eigen::Vector3d::Zero();
+  double radius_m = 0.0;
+};
+
 class RaycastScene {
  public:
   using PoseFunction = std::function<Eigen::Isometry3d(double t_s)>;  // X_WO at time t

@@ -18,6 +18,7 @@
 #include "sim/bench_beam.h"
 #include "sim/bench_events.h"
 #include "sim/bench_link.h"
+#include "sim/bench_radar.h"
 #include "sim/bench_raycast.h"
 #include "sim/core/error.h"
 #include "sim/run.h"
@@ -45,7 +46,7 @@ const char* kMainHelp =
     "  run SCENARIO.json          run a scenario and write its run directory\n"
     "  sweep SPEC.json            run a grid of scenarios (packet loss x weather x seeds)\n"
     "  train SCENARIO.json        train the UAVLoc model by simulation\n"
-    "  bench [raycast|events|link|beam|pipeline|all]   measure the hot paths\n"
+    "  bench [raycast|radar|events|link|beam|pipeline|all]   measure the hot paths\n"
     "\n"
     "options: --help (also after a command), --version, --quiet (every command)\n"
     "exit codes: 0 ok, 1 failure while running, 2 bad input or usage, 130 interrupted\n";
@@ -92,10 +93,11 @@ const char* kTrainHelp =
     "then TE-Align, MADW, MICA and Mamba) with LibTorch on the CPU.\n";
 
 const char* kBenchHelp =
-    "usage: uavsim bench [raycast|events|link|beam|pipeline|all] [--quiet]\n"
+    "usage: uavsim bench [raycast|radar|events|link|beam|pipeline|all] [--quiet]\n"
     "\n"
     "  raycast    Embree rtcIntersect1 throughput vs each sensor's rays per second in the\n"
     "             default city; the camera's packet speed-up; camera + LiDAR real-time factor\n"
+    "  radar      FMCW radar frame: scatterers, IF-cube synthesis, processing (one thread)\n"
     "  events     the event core: hold model (pop earliest, schedule one at a random delay)\n"
     "             with 1e3..1e6 pending events; events per second\n"
     "  link       messages per second through one uplink under the event core\n"
@@ -243,6 +245,7 @@ int Bench(int argc, char** argv) {
   const bool quiet = a.Has("--quiet");
   const std::vector<std::pair<std::string, std::function<int()>>> targets{
       {"raycast", [&] { return uavsim::sim::BenchRaycast(quiet, std::cout); }},
+      {"radar", [&] { return uavsim::sim::BenchRadar(quiet, std::cout); }},
       {"events", [&] { return uavsim::sim::BenchEvents(quiet, std::cout); }},
       {"link", [&] { return uavsim::sim::BenchLink(quiet, std::cout); }},
       {"beam", [&] { return uavsim::sim::BenchBeam(quiet, std::cout); }},

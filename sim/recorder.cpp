@@ -4,6 +4,7 @@
 
 #include "sensors/image_io.h"
 #include "sensors/ply_io.h"
+#include "sensors/radar_image.h"
 
 namespace uavsim::sim {
 
@@ -38,6 +39,17 @@ void Recorder::RecordLidar(const std::string& node_id, const sensors::PointCloud
   const std::string file = "frames/lidar/" + NextName("lidar") + ".ply";
   dir_.WriteText(file, sensors::EncodePly(frame));
   Index(frame.t_start_s, node_id, file);
+}
+
+void Recorder::RecordRadar(const std::string& node_id, const sensors::RadarFrame& frame) {
+  const std::string n = NextName("radar");
+  const std::string ply = "frames/radar/" + n + ".ply";
+  dir_.WriteText(ply, sensors::EncodePly(frame));
+  Index(frame.t_capture_s, node_id, ply);
+  const std::string png = "frames/radar/" + n + ".png";
+  const std::vector<std::uint8_t> image = sensors::EncodeRangeDopplerPng(frame.range_doppler);
+  dir_.WriteText(png, std::string(image.begin(), image.end()));
+  Index(frame.t_capture_s, node_id, png);
 }
 
 void Recorder::Finish() {

@@ -1,6 +1,7 @@
 // Writes raw sensor frames into a run directory (`uavsim run --record`):
 // frames/camera/{left,right}/NNNNNN.png, frames/lidar/NNNNNN.ply,
-// frames/radar/NNNNNN.ply and frames/index.csv (t_s,sensor,file), numbered
+// frames/radar/NNNNNN.ply with its range-Doppler map frames/radar/NNNNNN.png,
+// and frames/index.csv (t_s,sensor,file), numbered
 // per modality in capture order. Files go through the run directory's
 // staging, so a failed run leaves none of them under the final name.
 #pragma once
@@ -25,6 +26,9 @@ class Recorder {
 
   void RecordCamera(const std::string& node_id, const sensors::StereoFrame& frame);
   void RecordLidar(const std::string& node_id, const sensors::PointCloudFrame& frame);
+  // frames/radar/NNNNNN.ply (detections) and frames/radar/NNNNNN.png (its
+  // range-Doppler map in dB).
+  void RecordRadar(const std::string& node_id, const sensors::RadarFrame& frame);
 
   // Writes frames/index.csv (if anything was recorded).
   void Finish();

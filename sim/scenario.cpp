@@ -56,8 +56,10 @@ std::vector<NodeConfig> Scenario::DefaultNodes() {
   NodeConfig radar;
   radar.id = "radar1";
   radar.sensor.type = sensors::SensorType::kFmcwRadar;
-  radar.sensor.radar.pose.position_m = {-30.0, 30.0, 1.5};
-  radar.sensor.radar.pose.rpy_deg = {0.0, -30.0, -45.0};
+  // Nearer the plaza than the other two: a 0.035 m^2 drone fades into the
+  // noise beyond about 50 m for this AWR1843-class link budget.
+  radar.sensor.radar.pose.position_m = {-24.0, 24.0, 1.5};
+  radar.sensor.radar.pose.rpy_deg = {0.0, -50.0, -45.0};
   return {cam, lidar, radar};
 }
 

@@ -1,0 +1,43 @@
+#include "pipeline/edge_localizer.h"
+
+#include <utility>
+
+#include "pipeline/uavloc_model.h"
+
+namespace uavsim::pipeline {
+
+struct EdgeLocalizer::Impl {
+  explicit Impl(UavLocModel m) : model(std::move(m)) {}
+  UavLocModel model;
+  bool has_seen_data = false;
+};
+
+EdgeLocalizer::EdgeLocalizer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+EdgeLocalizer::~EdgeLocalizer() = default;
+
+std::unique_ptr<EdgeLocalizer> EdgeLocalizer::Load(const std::string& path) {
+  UavLocModel model = LoadUavLocModel(path);
+  model->eval();
+  return std::unique_ptr<EdgeLocalizer>(
+      new EdgeLocalizer(std::make_unique<Impl>(std::move(model))));
+}
+
+std::optional<Eigen::Vector3d> EdgeLocalizer::OnWindow(const WindowInputs& window) {
+  const Eigen::Vector3d p = impl_->model->Step(window);
+  const TeAlign& align = impl_->model->te_align();
+  for (const auto& frames : window.frames)
+    for (const LatentFrame& f : frames)
+      if (align.WindowOf(f.t_s) == window.window) impl_->has_seen_data = true;
+  if (!impl_->has_seen_data || !p.allFinite()) return std::nullopt;
+  return p;
+}
+
+void EdgeLocalizer::Reset() {
+  impl_->model->ResetState();
+  impl_->has_seen_data = false;
+}
+
+int EdgeLocalizer::latent_dim() const { return impl_->model->config().latent_dim; }
+double EdgeLocalizer::window_s() const { return impl_->model->config().window_s; }
+
+}  // namespace uavsim::pipeline

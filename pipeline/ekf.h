@@ -1,0 +1,332 @@
+// The classical baseline a user would pick instead of UAVLoc (issue 6 item
+// 5): an extended Kalman filter, or an IMM of two, that fuses the same
+// pre-processed observations as the learned pipeline (pipeline/observations.h)
+// asynchronously, with noises set from the sensors' configurations and the
+// target's limits. Estimates are the `ekf` rows of estimates.csv.
+//
+// State, world frame ENU, SI units: x = [p (m), v (m/s), a (m/s^2)], 9-D,
+// the same layout for every motion model (CV carries a = 0).
+//
+// Motion models, per axis, with white-noise spectral densities (Bar-Shalom,
+// Li & Kirubarajan, "Estimation with Applications to Tracking and
+// Navigation", 2001, Secs. 6.2-6.3):
+//   CV (white acceleration, q_a in m^2/s^3): p' = v, v' = w, a = 0,
+//     F = [1 dt; 0 1],  Q = q_a [dt^3/3 dt^2/2; dt^2/2 dt]
+//   CA (white jerk, q_j in m^2/s^5): p' = v, v' = a, a' = w,
+//     F = [1 dt dt^2/2; 0 1 dt; 0 0 1],
+//     Q = q_j [dt^5/20 dt^4/8 dt^3/6; dt^4/8 dt^3/3 dt^2/2; dt^3/6 dt^2/2 dt]
+//   With a_max = max_accel_mps2 and T = maneuver_time_s: a white process of
+//   density q averaged over T has variance q / T, so a mean acceleration of
+//   sigma_a over a manoeuvre of T needs q_a = sigma_a^2 T, and an
+//   acceleration that changes by sigma_da within T needs q_j = sigma_da^2 / T:
+//     "cv":  q_a = (cv_accel_fraction a_max)^2 T
+//     "imm": CV mode q_a = (imm_cv_accel_fraction a_max)^2 T,
+//            CA mode q_j = (imm_ca_jerk_fraction a_max)^2 / T.
+//   IMM (Blom & Bar-Shalom 1988): mode switches are a continuous-time Markov
+//   chain with mean sojourn times tau_cv, tau_ca, so over any dt
+//   Pi(dt) = exp(Lambda dt) exactly (asynchronous updates need no fixed
+//   step); mixing, mode-matched EKF updates, mode probabilities from the
+//   innovation likelihoods; the output is the moment-matched mixture.
+//
+// Measurements, each applied at its own timestamp tau (predict to tau, then
+// update; Joseph-form covariance update):
+//   LiDAR (PointObservation, 4 channels): the centroid c of the N dynamic
+//     points, a 3-D position. With u the unit line of sight from the LiDAR,
+//     R = |c - s|, g = (angular resolution) R the beam cell at that range,
+//     sigma_e^2 = mean(size^2) / 12 the target's extent per axis:
+//       per-point prior   S0 = sigma_e^2 I + sigma_r^2 u u^T + g^2/12 (I - u u^T)
+//       per-point         S1 = (nu S0 + (N - 1) S) / (nu + N - 1)   (S: sample covariance)
+//       centroid          Cov = S1 / N + lidar_floor_m^2 I
+//     sigma_r = range_noise_m; nu = lidar_prior_points. Angular resolution:
+//     spinning max(azimuth step, largest channel gap); rosette
+//     sqrt(field-of-view solid angle / points per frame).
+//   Radar (PointObservation, 5 channels): each detection d = R_WR^T (p - s)
+//     in the radar frame (sensors/fmcw_radar.h conventions) gives
+//       z = [range, azimuth, elevation, radial velocity (+ = receding)],
+//       h(p, v) = [|d|, atan2(d_y, d_x), asin(d_z / |d|), (p - s).v / |p - s|]
+//     with resolutions from FmcwRadarConfig (RadarResolutionOf):
+//       dR = c / (2 B_s), B_s the bandwidth swept while the ADC samples;
+//       dv = lambda / (2 N_chirps T_c); du = 1 / (N spacing_wavelengths) in
+//       direction cosines (2/N rad at lambda/2 spacing)
+//     and the estimation accuracy rule sigma = k res / sqrt(2 SNR)
+//     (k = radar_sigma_scale, SNR the detection's integrated SNR):
+//       sigma_R^2 = (k dR)^2 / (2 SNR) + sigma_e^2,
+//       sigma_uy^2, sigma_uz^2 = (k du)^2 / (2 SNR) + (sigma_e / R)^2, mapped to
+//       (azimuth, elevation) through u_y = cos el sin az, u_z = sin el,
+//       sigma_v^2 = (k dv)^2 / (2 SNR),
+//     plus a per-frame error common to all of a frame's detections,
+//     diag(radar_range_floor_m, radar_angle_floor_deg x2, radar_velocity_floor_mps)^2.
+//     A frame's gated detections are one stacked update whose noise has the
+//     common part in every cross block. Azimuth innovations wrap to (-pi, pi];
+//     velocity innovations to the unambiguous interval +-lambda / (4 T_c).
+//   Camera (CameraObservation, detected): the two unit rays from the eyes
+//     through the ROI centres. z = both rays' components on an orthonormal
+//     pair (e1, e2) normal to the predicted line of sight, h(p) the same
+//     for the unit vectors (p - eye) / |p - eye|. Stereo triangulation of
+//     the rays (midpoint of their shortest segment) is what these four
+//     numbers say about p; the filter uses the rays themselves because at
+//     this scenario's ranges the disparity is below a pixel (a 0.12 m
+//     baseline at 50 m) and a triangulated point is far from Gaussian, while
+//     the rays are; the update is the same to first order where
+//     triangulation is well conditioned. Noise: a pixel error sigma maps to
+//     angle through the Mei model r(theta) = f sin(theta) / (cos(theta) + xi)
+//     at the ray's angle theta from the optical axis (f = (fx + fy) / 2):
+//       radially sigma (cos th + xi)^2 / (f (1 + xi cos th)),
+//       tangentially sigma (cos th + xi) / f   (both (1 + xi) sigma / f on axis).
+//     The right eye's ROI is the left's moved by the stereo match
+//     (camera pre-processing), so the ROI-centre error (camera_centre_sigma_px)
+//     is common to both eyes and only the match error
+//     (camera_disparity_sigma_px) is the right eye's own:
+//       Cov = [C, C; C, C + D].
+//     Depth error of the triangulation: sigma_Z ~ Z^2 sigma_angle sqrt(2) / b.
+//
+// Gating: each component (a LiDAR fix, a camera pair, one radar detection)
+// is tested against the combined prediction: accepted when
+// y^T S^-1 y <= chi2_inv(gate_probability, dim y).
+//
+// Track management: a track starts from the first LiDAR fix, radar frame
+// (its strongest detection; velocity known along the line of sight only),
+// position fix, or camera triangulation whose relative depth error is at most
+// camera_init_max_relative_sigma. Unknown velocity has variance max_speed^2/3
+// per axis (any direction at up to max speed), acceleration max_accel^2/3.
+// A measurement that could start a track but falls wholly outside the gate,
+// when no such measurement has been accepted for max_gap_s, starts a new
+// track (camera rays alone do not keep a track: they cannot tell a wrong
+// range). Estimates are extrapolated at most max_gap_s past the last accepted
+// update and held there.
+//
+// Out-of-order measurements: observations are buffered for
+// reorder_window_s behind the newest time seen (an observation's timestamp
+// or a query), kept sorted by (timestamp, node, arrival), and folded into
+// the committed state when they leave that window; a query runs a copy of
+// the committed state through the buffer. Any arrival order within the
+// window gives bit-identical results to in-order arrival; an observation
+// older than the window is dropped and counted in `too_late`.
+//
+// Thread safety: none (one Ekf per run). Deterministic: no randomness.
+// Errors: std::invalid_argument for an unknown or duplicate node id, an
+// observation of the wrong type or channel count for its node.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "pipeline/ekf_config.h"
+#include "pipeline/observations.h"
+#include "sensors/fisheye_stereo_config.h"
+#include "sensors/fmcw_radar_config.h"
+#include "sensors/lidar_config.h"
+
+namespace uavsim::pipeline {
+
+using Vector9d = Eigen::Matrix<double, 9, 1>;
+using Matrix9d = Eigen::Matrix<double, 9, 9>;
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+
+// A position measurement with its covariance: the LiDAR centroid, or any
+// other localizer's output fed in as a measurement.
+struct PositionFix {
+  double t_s = 0.0;
+  Eigen::Vector3d position_w = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d covariance_m2 = Eigen::Matrix3d::Identity();
+};
+
+// The filter's estimate at a time: moment-matched over the IMM's modes.
+struct EkfEstimate {
+  double t_s = 0.0;
+  Eigen::Vector3d position_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d velocity_mps = Eigen::Vector3d::Zero();
+  Matrix6d covariance = Matrix6d::Identity();  // of [p, v]: m^2, m^2/s, m^2/s^2
+  double time_since_update_s = 0.0;
+  std::vector<double> mode_probabilities;  // "cv": {1}; "imm": {CV, CA}
+};
+
+// Per-node counters, for the run's diagnostics. Counted once per
+// observation, when it is committed (not when a query re-runs the buffer).
+struct EkfNodeStats {
+  std::size_t observations = 0;  // received, including undetected and too late
+  std::size_t too_late = 0;      // older than the reorder window: dropped
+  std::size_t accepted = 0;      // components inside the gate (a radar frame has one per detection)
+  std::size_t rejected = 0;      // components outside the gate
+  std::size_t initiations = 0;   // tracks started from this node
+  double nis_sum = 0.0;          // of accepted components, against the combined prediction
+  std::size_t nis_dof = 0;
+  // Near 1 (slightly below: the gate truncates the tail) when the noise
+  // model is honest; well above 1 means the stated noise is too small.
+  double MeanNisPerDof() const { return nis_dof ? nis_sum / static_cast<double>(nis_dof) : 0.0; }
+};
+
+class Ekf {
+ public:
+  explicit Ekf(const EkfConfig& config);
+
+  // Registers a sensing node; its configuration sets its noise model.
+  void AddCamera(const std::string& node_id, const sensors::FisheyeStereoConfig& config);
+  void AddLidar(const std::string& node_id, const sensors::LidarConfig& config);
+  void AddRadar(const std::string& node_id, const sensors::FmcwRadarConfig& config);
+  // A source of PositionFix measurements (tests, other localizers).
+  void AddPositionSource(const std::string& node_id);
+
+  // Hands over one observation, in any order within reorder_window_s.
+  void Observe(const std::string& node_id, const CameraObservation& observation);
+  void Observe(const std::string& node_id, const PointObservation& observation);
+  void Observe(const std::string& node_id, const PositionFix& fix);
+
+  // The position predicted at t_s (a window deadline) from every
+  // observation with a timestamp up to t_s; nullopt before the first track.
+  // Moves the newest time seen to t_s. A t_s older than the committed state
+  // extrapolates its mean backwards (the committed state already holds later
+  // measurements).
+  std::optional<Eigen::Vector3d> EstimateAt(double t_s);
+  std::optional<EkfEstimate> StateAt(double t_s);
+
+  const EkfNodeStats& stats(const std::string& node_id) const;  // throws std::invalid_argument
+  const EkfConfig& config() const { return config_; }
+
+  // Process-noise densities the config gives (formulas above).
+  double CvAccelPsd() const;    // m^2/s^3, the "cv" model or the IMM's CV mode
+  double CaJerkPsd() const;     // m^2/s^5, the IMM's CA mode
+
+ private:
+  // One piece of a measurement, linearised at a state: innovation z - h(x),
+  // Jacobian dh/dx (dim x 9) and noise covariance (dim x dim).
+  struct Linearization {
+    Eigen::VectorXd innovation;
+    Eigen::MatrixXd jacobian;
+    Eigen::MatrixXd noise;
+  };
+  struct TrackStart {
+    Eigen::Vector3d position_m;
+    Eigen::Matrix3d position_cov;
+    Eigen::Vector3d velocity_mps;
+    Eigen::Matrix3d velocity_cov;
+  };
+  // An observation made ready for the filter: its components (gated one by
+  // one, updated together), the noise shared by every pair of components
+  // (radar frames), and how it would start a track.
+  struct Measurement {
+    double t_s = 0.0;
+    int node = 0;
+    std::uint64_t arrival = 0;
+    std::vector<std::function<Linearization(const Vector9d&)>> components;
+    Eigen::MatrixXd common_noise;  // empty: independent components
+    std::optional<TrackStart> start;
+  };
+  struct Mode {
+    Vector9d x = Vector9d::Zero();
+    Matrix9d P = Matrix9d::Identity();
+  };
+  struct Track {
+    bool initialized = false;
+    bool confirmed = false;  // a ranging measurement has been accepted since the start
+    int rejections = 0;      // in a row, while not confirmed
+    double t_s = 0.0;
+    double t_last_update_s = 0.0;  // last accepted update
+    double t_last_anchor_s = 0.0;  // last accepted update from a measurement that could start one
+    std::vector<Mode> modes;
+    std::vector<double> mu;
+  };
+  enum class NodeKind { kCamera, kLidar, kRadar, kPosition };
+  struct Node {
+    std::string id;
+    NodeKind kind = NodeKind::kPosition;
+    sensors::FisheyeStereoConfig camera;
+    sensors::LidarConfig lidar;
+    sensors::FmcwRadarConfig radar;
+    EkfNodeStats stats;
+    std::uint64_t arrivals = 0;
+  };
+
+  int AddNode(const std::string& node_id, NodeKind kind);
+  Node& NodeOf(const std::string& node_id, NodeKind kind);
+  static Linearization LinearPosition(const Eigen::Vector3d& z, const Eigen::Matrix3d& R,
+                                      const Vector9d& x);
+  Measurement PrepareCamera(const Node& node, const CameraObservation& o) const;
+  Measurement PrepareLidar(const Node& node, const PointObservation& o) const;
+  Measurement PrepareRadar(const Node& node, const PointObservation& o) const;
+  void Enqueue(Node& node, Measurement m);
+  void AdvanceHorizon(double t_s);
+  // The track, and a candidate started by a ranging measurement the track
+  // rejected after going without one for max_gap_s.
+  struct Tracks {
+    Track main;
+    Track candidate;
+  };
+  void Apply(Tracks& tracks, const Measurement& m, EkfNodeStats* stats) const;
+  // Predict, gate, update; the number of components accepted.
+  int Update(Track& track, const Measurement& m, EkfNodeStats* stats) const;
+  void Start(Track& track, const TrackStart& start, double t_s) const;
+  void Predict(Track& track, double t_s) const;
+  EkfEstimate Combine(const Track& track, double t_s) const;
+  double GateThreshold(int dof) const;
+
+  EkfConfig config_;
+  std::vector<Node> nodes_;
+  std::map<std::string, int> node_index_;
+  Tracks committed_;
+  std::vector<Measurement> buffer_;  // sorted by (t_s, node, arrival)
+  double horizon_s_ = -1e300;        // newest time seen minus reorder_window_s
+  struct ModeModel {
+    bool constant_acceleration = false;  // CA (white jerk), else CV (white acceleration)
+    double psd = 0.0;                    // q_j (m^2/s^5) or q_a (m^2/s^3)
+    double sojourn_s = 1.0;              // mean time before switching (IMM)
+  };
+  std::vector<ModeModel> modes_;
+  std::vector<double> gate_by_dof_;
+};
+
+// --- Sensor models, for the filter and for tests. ---
+
+// Theoretical resolutions of an FMCW radar (sensors/fmcw_radar.h).
+struct RadarResolution {
+  double range_m = 0.0;             // c / (2 B_s), B_s = bandwidth * ADC window / chirp duration
+  double velocity_mps = 0.0;        // lambda / (2 N_chirps (T_chirp + T_idle))
+  double max_velocity_mps = 0.0;    // unambiguous: lambda / (4 (T_chirp + T_idle))
+  double direction_cosine_y = 0.0;  // 1 / (nx spacing_x_wavelengths)
+  double direction_cosine_z = 0.0;  // 1 / (ny spacing_y_wavelengths)
+};
+RadarResolution RadarResolutionOf(const sensors::FmcwRadarConfig& config);
+
+// The LiDAR centroid fix of a cloud (channels 4: x y z intensity), with the
+// covariance of the header comment; nullopt for an empty cloud.
+std::optional<PositionFix> LidarCentroidFix(const PointObservation& observation,
+                                            const sensors::LidarConfig& lidar,
+                                            const EkfConfig& config);
+
+// Radar measurement h(p, v) = [range m, azimuth rad, elevation rad, radial
+// velocity m/s] of a target at p with velocity v (world), for a radar at
+// radar_w whose frame R has rotation R_WR; and its Jacobian d h / d [p, v].
+Eigen::Vector4d RadarMeasurement(const Eigen::Vector3d& p, const Eigen::Vector3d& v,
+                                 const Eigen::Vector3d& radar_w, const Eigen::Matrix3d& R_WR);
+Eigen::Matrix<double, 4, 6> RadarJacobian(const Eigen::Vector3d& p, const Eigen::Vector3d& v,
+                                          const Eigen::Vector3d& radar_w,
+                                          const Eigen::Matrix3d& R_WR);
+
+// Midpoint of the shortest segment between two rays o + t d (d unit),
+// t the distances along each ray; nullopt for parallel rays or a point
+// behind either eye.
+struct Triangulation {
+  Eigen::Vector3d point_w = Eigen::Vector3d::Zero();
+  double range_left_m = 0.0;
+  double range_right_m = 0.0;
+  double gap_m = 0.0;  // length of the shortest segment
+};
+std::optional<Triangulation> TriangulateMidpoint(const Eigen::Vector3d& eye_left_w,
+                                                 const Eigen::Vector3d& ray_left_w,
+                                                 const Eigen::Vector3d& eye_right_w,
+                                                 const Eigen::Vector3d& ray_right_w);
+
+// Radians per pixel of the Mei model at angle theta from the optical axis:
+// {radial, tangential} (header comment).
+Eigen::Vector2d FisheyeRadPerPixel(double theta_rad, double focal_px, double xi);
+
+// Inverse of the chi-square CDF with `dof` degrees of freedom, p in (0, 1).
+double ChiSquareQuantile(double p, int dof);
+
+}  // namespace uavsim::pipeline

@@ -1,0 +1,101 @@
+// Sensing-node pre-processing parameters (paper Sec. IV-A), one object per
+// modality under the scenario's /pipeline/preprocess. The processing itself
+// and the meaning of each key are in camera_preprocessor.h,
+// lidar_preprocessor.h and radar_preprocessor.h.
+//
+// Ablations (paper Sec. VI, "without preprocessing" and the camera-only
+// table): `raw` switches every modality to its raw variant; a modality's own
+// `raw` switches only that one.
+#pragma once
+
+#include <optional>
+
+namespace uavsim::pipeline {
+
+struct CameraPreprocessConfig {
+  bool raw = false;
+  // Rectified pinhole view of each eye (same orientation as the eye, so the
+  // stereo pair is row-aligned). Principal point at the image centre.
+  int rectified_width_px = 640;
+  int rectified_height_px = 480;
+  // null: fx_px / (1 + xi), the fisheye's own scale at its centre (no
+  // magnification of the central pixels).
+  std::optional<double> rectified_focal_px;
+  // Background subtraction (OpenCV MOG2) on the rectified left eye. No
+  // detection is reported during the first warmup_frames frames.
+  int warmup_frames = 15;
+  int mog2_history_frames = 300;
+  double mog2_var_threshold = 16.0;  // squared Mahalanobis distance to the background model
+  int morphology_kernel_px = 3;      // closing (joins a target's fragments); 1: none
+  // After closing. A 0.5 m UAV at 70 m is about one rectified pixel; MOG2's
+  // per-pixel variance and the stereo check (ncc_min) reject sensor noise.
+  int min_blob_area_px = 1;
+  // Prefer the largest blob within gate_px of the previous detection (made
+  // within the last gate_max_age_frames frames); 0: no gate.
+  double gate_px = 50.0;
+  int gate_max_age_frames = 15;
+  // ROI: a square of side max(min_roi_side_px, roi_margin * blob extent).
+  double roi_margin = 3.0;
+  double min_roi_side_px = 32.0;
+  // Right eye: normalised cross-correlation of the left patch along the
+  // epipolar row band, over the disparities of targets beyond
+  // stereo_min_range_m; a best score below ncc_min is no detection.
+  double stereo_min_range_m = 2.0;
+  double ncc_min = 0.5;
+  int epipolar_slack_px = 1;  // rows searched above and below the left row
+};
+
+struct LidarPreprocessConfig {
+  bool raw = false;
+  // Static background: voxels hit in at least occupancy_threshold of the
+  // first warmup_frames scans. Nothing is reported during warm-up. The
+  // default suits the default Livox-like rosette, whose non-repetitive
+  // pattern hits a given 0.5 m voxel in only ~7 % of its 0.1 s scans: one
+  // hit in 20 scans makes a voxel static (a target seen during warm-up then
+  // leaves its voxels as background). A spinning LiDAR hits every static
+  // voxel in every scan and can use e.g. 0.5, which no passing target reaches.
+  double voxel_size_m = 0.5;
+  int warmup_frames = 20;
+  double occupancy_threshold = 0.05;
+  // A point is static if its voxel is, or (static_neighbourhood) any of the
+  // 26 voxels around it is.
+  bool static_neighbourhood = true;
+  // DBSCAN of the dynamic points; keep the clusters_kept largest (0: keep
+  // every dynamic point, unclustered). At 60 m the UAV returns 1-3 points a
+  // scan, so a single point is a cluster by default.
+  double cluster_eps_m = 1.0;
+  int cluster_min_points = 1;
+  int clusters_kept = 1;
+};
+
+struct RadarPreprocessConfig {
+  bool raw = false;
+  // DBSCAN on (x, y, z, velocity_weight_s * radial velocity); keep the
+  // clusters_kept largest (0: keep every point). Birds form small clusters.
+  double cluster_eps_m = 1.5;
+  int cluster_min_points = 1;
+  double velocity_weight_s = 0.0;
+  int clusters_kept = 1;
+};
+
+struct PreprocessConfig {
+  bool raw = false;  // every modality raw: the paper's "without preprocessing"
+  CameraPreprocessConfig camera;
+  LidarPreprocessConfig lidar;
+  RadarPreprocessConfig radar;
+
+  bool CameraRaw() const { return raw || camera.raw; }
+  bool LidarRaw() const { return raw || lidar.raw; }
+  bool RadarRaw() const { return raw || radar.raw; }
+};
+
+template <class V>
+void Visit(V& v, CameraPreprocessConfig& c);
+template <class V>
+void Visit(V& v, LidarPreprocessConfig& c);
+template <class V>
+void Visit(V& v, RadarPreprocessConfig& c);
+template <class V>
+void Visit(V& v, PreprocessConfig& c);
+
+}  // namespace uavsim::pipeline

@@ -1,0 +1,129 @@
+// The edge server's UAVLoc network (paper Sec. V, Fig. "data processing
+// network"): TE-Align -> MADW -> MICA -> concatenation [t^{c,f}, t^{l,f},
+// t^{r,f}] -> Mamba -> linear head -> 3-D position.
+//
+// Training runs forward() on batches of window sequences already aligned by
+// TeAlign (StackWindows); online use calls Step() once per window and keeps
+// the Mamba state between calls. The network predicts the position
+// normalised as (p - centre) / scale (scale isotropic, so the normalised MSE
+// is the paper's L^loc of Eq. (28) up to the constant 1/scale^2); centre and
+// scale are part of the configuration.
+//
+// Files: Save() writes the LibTorch archive of the weights at `path` and the
+// configuration as JSON at SidecarPath(path), each written to a temporary
+// name and renamed. Load() reads both; a bad sidecar is a core::ConfigError
+// naming the file and JSON pointer, bad or mismatched weights a
+// core::ConfigError naming the weights file.
+#pragma once
+
+#include <torch/torch.h>
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "pipeline/madw.h"
+#include "pipeline/mamba.h"
+#include "pipeline/mica.h"
+#include "pipeline/te_align.h"
+
+namespace uavsim::pipeline {
+
+inline constexpr const char* kUavLocModelFormat = "uavloc-model/1";
+
+struct UavLocModelConfig {
+  std::string format = kUavLocModelFormat;
+  // TE-Align (see TeAlignConfig).
+  int latent_dim = 16;  // z of every modality
+  double window_s = 0.2;
+  double kappa = 10000.0;
+  double time_unit_s = 1e-3;
+  // MADW and MICA (Table I: MLP_128; paper Sec. VI: λ initialised to 0.5).
+  int score_hidden = 128;
+  double lambda_init = 0.5;
+  // Mamba (the paper is silent; DESIGN.md: d_state 16, d_conv 4, expand 2).
+  int d_model = 64;
+  int layers = 2;
+  int d_state = 16;
+  int d_conv = 4;
+  int expand = 2;
+  // Output normalisation: the head predicts (p - centre) / scale, p in
+  // world ENU metres.
+  Eigen::Vector3d position_centre_m = Eigen::Vector3d::Zero();
+  double position_scale_m = 1.0;
+
+  TeAlignConfig te_align() const;
+  MambaRegressorOptions regressor() const;
+  // Throws std::invalid_argument naming the field.
+  void Validate() const;
+};
+
+template <class V>
+void Visit(V& v, UavLocModelConfig& c);
+
+class UavLocModelImpl : public torch::nn::Module {
+ public:
+  // Validates `config` (std::invalid_argument). Weights are drawn from
+  // LibTorch's global generator: the same torch::manual_seed gives the same
+  // model.
+  explicit UavLocModelImpl(const UavLocModelConfig& config);
+
+  // latents: t^{m,e}(k) [B, K, M, z] (M = 3 in Modality order); mask:
+  // [B, K, M], 1 available, 0 missing. Returns the normalised positions
+  // [B, K, 3]. Each sequence starts from a zero Mamba state.
+  torch::Tensor forward(const torch::Tensor& latents, const torch::Tensor& mask);
+
+  // MADW, MICA and concatenation of independent windows: [N, M, z], [N, M]
+  // -> t^f [N, M z].
+  torch::Tensor Fuse(const torch::Tensor& latents, const torch::Tensor& mask);
+
+  // Online: TE-Align of one window, fusion, one Mamba step; returns the
+  // position in metres. Windows must come in increasing order of k. A gap of
+  // up to kMaxGapWindows windows is stepped through as all-missing windows so
+  // the state keeps the window clock; a longer gap restarts from a zero
+  // state. Throws std::invalid_argument for k not after the previous window
+  // or for bad latents (see TeAlign::Align). No gradient is recorded.
+  Eigen::Vector3d Step(const WindowInputs& window);
+  // Forgets the recurrent state and the previous window.
+  void ResetState();
+  static constexpr int kMaxGapWindows = 50;
+
+  torch::Tensor NormalizePosition(const torch::Tensor& position_m) const;  // [..., 3]
+  torch::Tensor PositionInMetres(const torch::Tensor& normalized) const;   // [..., 3]
+  // Throws std::invalid_argument unless centre is finite and scale > 0.
+  void SetPositionNormalization(const Eigen::Vector3d& centre_m, double scale_m);
+
+  const UavLocModelConfig& config() const { return config_; }
+  const TeAlign& te_align() const { return te_align_; }
+
+  Madw madw{nullptr};
+  Mica mica{nullptr};
+  MambaRegressor regressor{nullptr};
+
+ private:
+  torch::Tensor StepAligned(const AlignedWindow& window);
+
+  UavLocModelConfig config_;
+  TeAlign te_align_;
+  MambaRegressorState state_;
+  std::optional<std::int64_t> last_window_;
+};
+TORCH_MODULE(UavLocModel);
+
+// Aligned windows of B sequences of equal length K as tensors for forward():
+// latents [B, K, M, z] and mask [B, K, M] (float32). Throws
+// std::invalid_argument if the sequences differ in length or latent size.
+struct FusionBatch {
+  torch::Tensor latents;
+  torch::Tensor mask;
+};
+FusionBatch StackWindows(const std::vector<std::vector<AlignedWindow>>& sequences);
+
+std::string SidecarPath(const std::string& path);  // path + ".json"
+// Throws std::runtime_error naming the file when it cannot be written.
+void SaveUavLocModel(const UavLocModel& model, const std::string& path);
+UavLocModel LoadUavLocModel(const std::string& path);
+
+}  // namespace uavsim::pipeline
