@@ -3,12 +3,12 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
-#include <unsupported/Eigen/MatrixFunctions>
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 #include <tuple>
+#include <unsupported/Eigen/MatrixFunctions>
 #include <utility>
 
 namespace uavsim::pipeline {
@@ -156,7 +156,7 @@ Eigen::Matrix<double, 4, 6> RadarJacobian(const Vector3d& p, const Vector3d& v,
   const Vector3d d = R_WR.transpose() * w;
   const double r2 = d.squaredNorm(), r = std::sqrt(r2);
   const double rxy2 = d.x() * d.x() + d.y() * d.y(), rxy = std::sqrt(rxy2);
-  Eigen::Matrix3d dsph_dd;  // rows: range, azimuth, elevation; columns: d
+  Eigen::Matrix3d dsph_dd;                     // rows: range, azimuth, elevation; columns: d
   dsph_dd << d.x() / r, d.y() / r, d.z() / r,  //
       -d.y() / rxy2, d.x() / rxy2, 0.0,        //
       -d.x() * d.z() / (r2 * rxy), -d.y() * d.z() / (r2 * rxy), rxy / r2;
@@ -273,8 +273,7 @@ void Ekf::AddPositionSource(const std::string& node_id) { AddNode(node_id, NodeK
 
 Ekf::Node& Ekf::NodeOf(const std::string& node_id, NodeKind kind) {
   const auto it = node_index_.find(node_id);
-  if (it == node_index_.end())
-    throw std::invalid_argument("Ekf: unknown node \"" + node_id + "\"");
+  if (it == node_index_.end()) throw std::invalid_argument("Ekf: unknown node \"" + node_id + "\"");
   Node& node = nodes_[it->second];
   if (node.kind != kind && !(kind == NodeKind::kLidar && node.kind == NodeKind::kRadar))
     throw std::invalid_argument("Ekf: node \"" + node_id +
@@ -284,8 +283,7 @@ Ekf::Node& Ekf::NodeOf(const std::string& node_id, NodeKind kind) {
 
 const EkfNodeStats& Ekf::stats(const std::string& node_id) const {
   const auto it = node_index_.find(node_id);
-  if (it == node_index_.end())
-    throw std::invalid_argument("Ekf: unknown node \"" + node_id + "\"");
+  if (it == node_index_.end()) throw std::invalid_argument("Ekf: unknown node \"" + node_id + "\"");
   return nodes_[it->second].stats;
 }
 
@@ -395,8 +393,7 @@ Ekf::Measurement Ekf::PrepareRadar(const Node& node, const PointObservation& o) 
     const Eigen::Matrix2d Jinv = J.inverse();
     Eigen::Matrix4d own = Eigen::Matrix4d::Zero();
     own(0, 0) = k * k * res.range_m * res.range_m / (2.0 * snr);
-    own.block<2, 2>(1, 1) =
-        Jinv * Eigen::Vector2d(var_uy, var_uz).asDiagonal() * Jinv.transpose();
+    own.block<2, 2>(1, 1) = Jinv * Eigen::Vector2d(var_uy, var_uz).asDiagonal() * Jinv.transpose();
     own(3, 3) = k * k * res.velocity_mps * res.velocity_mps / (2.0 * snr);
     const Eigen::Matrix4d R = own + common;
     const double v_max = res.max_velocity_mps;
@@ -421,9 +418,9 @@ Ekf::Measurement Ekf::PrepareRadar(const Node& node, const PointObservation& o) 
       const Matrix3d Jw = R_WR * dp_dsph;
       const Vector3d u = (p - s).normalized();
       const double v2 = config_.max_speed_mps * config_.max_speed_mps / 3.0;
-      m.start = TrackStart{p, Jw * R.topLeftCorner<3, 3>() * Jw.transpose(), radial_mps * u,
-                           R(3, 3) * u * u.transpose() +
-                               v2 * (Matrix3d::Identity() - u * u.transpose())};
+      m.start =
+          TrackStart{p, Jw * R.topLeftCorner<3, 3>() * Jw.transpose(), radial_mps * u,
+                     R(3, 3) * u * u.transpose() + v2 * (Matrix3d::Identity() - u * u.transpose())};
     }
   }
   return m;
@@ -678,11 +675,12 @@ void Ekf::Apply(Tracks& tracks, const Measurement& m, EkfNodeStats* stats) const
   }
   // A confirmed track is kept against clutter while ranging measurements
   // keep agreeing with it (camera rays alone cannot tell a wrong range).
-  // After max_gap_s without one, a rejected ranging measurement starts a
-  // candidate, and a second one consistent with the candidate replaces the
-  // track: one false alarm cannot take a good track away.
+  // Once none has for ranging_timeout_s, a rejected ranging measurement
+  // starts a candidate, and a second one that the track rejects too but the
+  // candidate accepts replaces the track: a lone false alarm cannot take a
+  // good track away.
   if (lost && stats) stats->rejected += m.components.size();
-  if (!m.start || (!lost && m.t_s - main.t_last_anchor_s <= config_.max_gap_s)) return;
+  if (!m.start || (!lost && m.t_s - main.t_last_anchor_s <= config_.ranging_timeout_s)) return;
   Track& candidate = tracks.candidate;
   if (candidate.initialized && m.t_s - candidate.t_last_update_s <= config_.max_gap_s &&
       Update(candidate, m, nullptr) > 0) {

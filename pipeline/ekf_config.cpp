@@ -11,9 +11,8 @@ template <class V>
 void Visit(V& v, EkfConfig& c) {
   v.Enum("motion_model", c.motion_model,
          {{"cv", EkfMotionModel::kConstantVelocity}, {"imm", EkfMotionModel::kImm}});
-  v("max_speed_mps", c.max_speed_mps, Rule::Positive(1000.0));
-  v("max_accel_mps2", c.max_accel_mps2, Rule::Positive(1000.0));
-  v("target_size_m", c.target_size_m, Rule::Range(0.0, 100.0));
+  // max_speed_mps, max_accel_mps2 and target_size_m are not keys: the engine
+  // takes them from uavs[0] (its trajectory limits and size_m).
   v("maneuver_time_s", c.maneuver_time_s, Rule::Range(0.01, 100.0));
   v("cv_accel_fraction", c.cv_accel_fraction, Rule::Range(1e-4, 10.0));
   v("imm_cv_accel_fraction", c.imm_cv_accel_fraction, Rule::Range(1e-4, 10.0));
@@ -22,6 +21,7 @@ void Visit(V& v, EkfConfig& c) {
   v("imm_ca_sojourn_s", c.imm_ca_sojourn_s, Rule::Range(0.01, 1e4));
   v("gate_probability", c.gate_probability, Rule{0.5, 1.0, false, true});
   v("max_gap_s", c.max_gap_s, Rule::Positive(1e4));
+  v("ranging_timeout_s", c.ranging_timeout_s, Rule::Positive(1e4));
   v("reorder_window_s", c.reorder_window_s, Rule::NonNegative(60.0));
   v.Check(c.max_gap_s > c.reorder_window_s, "max_gap_s",
           "max_gap_s (" + FormatNumber(c.max_gap_s) + " s) must exceed reorder_window_s (" +

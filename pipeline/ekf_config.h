@@ -18,8 +18,9 @@ enum class EkfMotionModel {
 struct EkfConfig {
   EkfMotionModel motion_model = EkfMotionModel::kImm;
 
-  // The target: its trajectory's limits and its size (the engine copies
-  // uavs[0].trajectory.max_speed_mps, max_accel_mps2 and uavs[0].size_m).
+  // The target: its trajectory's limits and its size. Not scenario keys: the
+  // engine copies uavs[0].trajectory.max_speed_mps, max_accel_mps2 and
+  // uavs[0].size_m here.
   double max_speed_mps = 10.0;
   double max_accel_mps2 = 5.0;
   Eigen::Vector3d target_size_m{0.5, 0.5, 0.2};
@@ -34,15 +35,17 @@ struct EkfConfig {
   // types (tests/pipeline/ekf_test.cpp, "[tuning]").
   double maneuver_time_s = 1.0;
   double cv_accel_fraction = 0.3;
-  double imm_cv_accel_fraction = 0.5;
-  double imm_ca_jerk_fraction = 0.2;
+  double imm_cv_accel_fraction = 0.3;
+  double imm_ca_jerk_fraction = 0.1;
   double imm_cv_sojourn_s = 2.0;
   double imm_ca_sojourn_s = 3.0;
 
   // Gating and track management.
   double gate_probability = 0.99;  // chi-square gate per measurement component
-  double max_gap_s = 2.0;          // no position-fixing update for this long: the next
-                                   // measurement outside the gate starts a new track
+  double max_gap_s = 2.0;          // no update for this long: the track is lost (re-acquired
+                                   // like a new one) and its estimate held since
+  double ranging_timeout_s = 1.0;  // no ranging measurement accepted for this long: two
+                                   // consistent rejected ones replace the track
   double reorder_window_s = 0.2;   // out-of-order tolerance: measurements this much older
                                    // than the newest time seen are still applied in order
 

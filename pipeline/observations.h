@@ -16,12 +16,12 @@ constexpr int kModalityCount = 3;
 struct CameraObservation {
   static constexpr int kCropPx = 128;  // paper: image input 128 x 128
   double t_s = 0.0;
-  bool detected = false;        // false: no moving blob; crops are zero
-  std::vector<float> crop_left;   // kCropPx * kCropPx grey values in [0, 1], row-major
+  bool detected = false;         // false: no moving blob; crops are zero
+  std::vector<float> crop_left;  // kCropPx * kCropPx grey values in [0, 1], row-major
   std::vector<float> crop_right;
-  Eigen::Vector2f centre_left_px = Eigen::Vector2f::Zero();   // ROI centre, rectified left image
+  Eigen::Vector2f centre_left_px = Eigen::Vector2f::Zero();  // ROI centre, rectified left image
   Eigen::Vector2f centre_right_px = Eigen::Vector2f::Zero();
-  float side_left_px = 0.0f;    // ROI side before resampling to kCropPx, rectified pixels
+  float side_left_px = 0.0f;  // ROI side before resampling to kCropPx, rectified pixels
   float side_right_px = 0.0f;
   // Unit rays from each eye's centre through its ROI centre, and the eyes'
   // positions: what stereo triangulation needs.
@@ -40,7 +40,9 @@ struct PointObservation {
   int channels = 4;
   std::vector<float> values;  // count() * channels, row-major
   Eigen::Vector3d sensor_position_w = Eigen::Vector3d::Zero();
-  std::size_t count() const { return channels > 0 ? values.size() / static_cast<std::size_t>(channels) : 0; }
+  std::size_t count() const {
+    return channels > 0 ? values.size() / static_cast<std::size_t>(channels) : 0;
+  }
 };
 
 }  // namespace uavsim::pipeline

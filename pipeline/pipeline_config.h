@@ -5,6 +5,9 @@
 #include <string>
 #include <vector>
 
+#include "pipeline/ekf_config.h"
+#include "pipeline/preprocess_config.h"
+
 namespace uavsim::pipeline {
 
 struct PipelineConfig {
@@ -13,6 +16,8 @@ struct PipelineConfig {
   int latent_dim = 16;            // paper: z in {4, 8, 16, 32, 64}
   double late_allowance_s = 0.0;  // grace after a window's deadline before a packet counts late
   std::vector<std::string> methods{"uavloc", "ekf"};
+  PreprocessConfig preprocess;  // the sensing nodes' pre-processing (paper Sec. IV-A)
+  EkfConfig ekf;                // the classical baseline
 };
 
 // The method names a scenario may list.

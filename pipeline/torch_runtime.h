@@ -8,7 +8,8 @@
 
 namespace uavsim::pipeline {
 
-// Sets intra-op threads to `threads` (>= 1) and seeds LibTorch's generator.
+// Sets intra-op threads (LibTorch's and OpenBLAS's) to `threads` (>= 1) and
+// seeds LibTorch's generator.
 // Call before any other LibTorch use; later calls only reseed.
 void InitTorch(int threads, std::uint64_t seed);
 

@@ -38,9 +38,9 @@ struct PointCloudFrame {
 
 // One radar detection after CFAR and angle estimation.
 struct RadarPoint {
-  float x_m, y_m, z_m;         // world frame
-  float radial_velocity_mps;   // positive = moving away from the radar
-  float snr_db;                // of the detection cell over the CFAR noise estimate
+  float x_m, y_m, z_m;        // world frame
+  float radial_velocity_mps;  // positive = moving away from the radar
+  float snr_db;               // of the detection cell over the CFAR noise estimate
 };
 
 // A range-Doppler power map (dB), range bins x Doppler bins, range fastest,
@@ -54,7 +54,7 @@ struct RangeDopplerMap {
 };
 
 struct RadarFrame {
-  double t_capture_s = 0.0;      // start of the frame's first chirp
+  double t_capture_s = 0.0;  // start of the frame's first chirp
   std::vector<RadarPoint> points;
   RangeDopplerMap range_doppler;  // summed over antennas
   std::size_t cube_bytes = 0;     // raw: the IF cube

@@ -26,7 +26,9 @@ struct RadarCube {
     return ((static_cast<std::size_t>(iy) * nx + ix) * chirps + c) * samples + s;
   }
   std::complex<float>& at(int s, int c, int ix, int iy) { return data[Index(s, c, ix, iy)]; }
-  const std::complex<float>& at(int s, int c, int ix, int iy) const { return data[Index(s, c, ix, iy)]; }
+  const std::complex<float>& at(int s, int c, int ix, int iy) const {
+    return data[Index(s, c, ix, iy)];
+  }
   std::size_t RawBytes() const { return data.size() * sizeof(std::complex<float>); }
 };
 

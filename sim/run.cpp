@@ -1,10 +1,13 @@
 #include "sim/run.h"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <ctime>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <set>
 
 #include "channel/beamformer.h"
@@ -12,6 +15,10 @@
 #include "channel/packet.h"
 #include "channel/rain_attenuation.h"
 #include "channel/uplink.h"
+#include "pipeline/camera_preprocessor.h"
+#include "pipeline/ekf.h"
+#include "pipeline/lidar_preprocessor.h"
+#include "pipeline/radar_preprocessor.h"
 #include "results/csv.h"
 #include "results/plot.h"
 #include "results/run_directory.h"
@@ -48,7 +55,33 @@ const char* const kModalities[] = {"camera", "lidar", "radar"};
 
 // Per-modality byte counters for the data-rate table (paper Table II).
 struct ByteCounters {
-  std::map<std::string, std::uint64_t> raw, compressed;
+  std::map<std::string, std::uint64_t> raw, preprocessed, compressed;
+};
+
+// What a node's message carries besides its latent: the pre-processed
+// measurement, for the edge's classical filter. The uplink decides its fate
+// together with the latent's (same packet).
+struct NodeContent {
+  std::string node_id;
+  std::optional<pipeline::CameraObservation> camera;
+  std::optional<pipeline::PointObservation> points;
+};
+
+// Bytes a pre-processed observation takes: the two ROI crops at 8 bits plus
+// their geometry, or the points as float32.
+std::uint64_t PreprocessedBytes(const NodeContent& c) {
+  if (c.camera)
+    return 2ull * pipeline::CameraObservation::kCropPx * pipeline::CameraObservation::kCropPx + 64;
+  if (c.points) return 4ull * c.points->values.size();
+  return 0;
+}
+
+// Root mean square of the Euclidean errors.
+struct RmseAccumulator {
+  double sum_sq = 0.0;
+  std::size_t count = 0;
+  void Add(const Eigen::Vector3d& error) { sum_sq += error.squaredNorm(), ++count; }
+  double value() const { return count ? std::sqrt(sum_sq / static_cast<double>(count)) : 0.0; }
 };
 
 // One sensing node: its sensor model, its noise stream and its frame clock.
@@ -60,6 +93,9 @@ struct Node {
   std::unique_ptr<sensors::Lidar> lidar;
   std::unique_ptr<sensors::FmcwRadar> radar;
   std::unique_ptr<sensors::RadarProcessor> radar_processor;
+  std::unique_ptr<pipeline::CameraPreprocessor> camera_pre;
+  std::unique_ptr<pipeline::LidarPreprocessor> lidar_pre;
+  std::unique_ptr<pipeline::RadarPreprocessor> radar_pre;
   core::RngStream noise{0};
   std::uint64_t sequence = 0;
   std::unique_ptr<core::PeriodicProcess> clock;
@@ -98,6 +134,34 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
       });
   truth_timer.Start(sim, 0, t_end);
 
+  // The edge's localization methods. `ekf` fuses the pre-processed
+  // measurements that arrive in time; `uavloc` needs a trained model.
+  const auto runs = [&](const char* method) {
+    return std::find(s.pipeline.methods.begin(), s.pipeline.methods.end(), method) !=
+           s.pipeline.methods.end();
+  };
+  std::unique_ptr<pipeline::Ekf> ekf;
+  if (runs("ekf")) {
+    pipeline::EkfConfig config = s.pipeline.ekf;
+    config.max_speed_mps = s.uavs.front().trajectory.max_speed_mps;
+    config.max_accel_mps2 = s.uavs.front().trajectory.max_accel_mps2;
+    config.target_size_m = s.uavs.front().size_m;
+    ekf = std::make_unique<pipeline::Ekf>(config);
+    for (const NodeConfig& n : s.nodes) {
+      switch (n.sensor.type) {
+        case sensors::SensorType::kFisheyeStereo:
+          ekf->AddCamera(n.id, n.sensor.fisheye);
+          break;
+        case sensors::SensorType::kLidar:
+          ekf->AddLidar(n.id, n.sensor.lidar);
+          break;
+        case sensors::SensorType::kFmcwRadar:
+          ekf->AddRadar(n.id, n.sensor.radar);
+          break;
+      }
+    }
+  }
+
   // Uplinks (one per entry of /links, shared by the nodes that name it) and
   // the edge server's reception accounting.
   std::vector<std::string> node_ids;
@@ -107,8 +171,12 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
   for (const auto& [name, config] : s.links) {
     auto link = std::make_unique<channel::Uplink>(
         sim, config, s.weather, core::RngStream(s.seed, "link/" + name), node_ids);
-    link->SetArrivalCallback(
-        [&edge](const channel::Message& m, core::SimTime t) { edge.OnArrival(m, t); });
+    link->SetArrivalCallback([&edge, &ekf](const channel::Message& m, core::SimTime t) {
+      if (!edge.OnArrival(m, t) || !ekf || !m.content) return;  // late: treated as missing
+      const auto& content = *static_cast<const NodeContent*>(m.content.get());
+      if (content.camera) ekf->Observe(content.node_id, *content.camera);
+      if (content.points) ekf->Observe(content.node_id, *content.points);
+    });
     link->SetLossCallback(
         [&edge](const channel::Message& m, channel::LossCause) { edge.OnLost(m); });
     links.emplace(name, std::move(link));
@@ -119,7 +187,8 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
   // and a header) on its uplink.
   ByteCounters bytes;
   std::map<std::string, std::uint64_t> frames;
-  for (const char* m : kModalities) frames[m] = 0, bytes.raw[m] = 0, bytes.compressed[m] = 0;
+  for (const char* m : kModalities)
+    frames[m] = 0, bytes.raw[m] = 0, bytes.preprocessed[m] = 0, bytes.compressed[m] = 0;
   const std::uint32_t message_bytes = channel::LatentMessageBytes(s.pipeline.latent_dim);
   auto small_objects = [&world](double t_s) {
     std::vector<sensors::BoundingSphere> spheres;
@@ -142,13 +211,19 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
         n.camera =
             std::make_unique<sensors::FisheyeStereo>(n.config->sensor.fisheye, world.scene());
         n.camera->set_small_objects(small_objects);
+        n.camera_pre = std::make_unique<pipeline::CameraPreprocessor>(n.config->sensor.fisheye,
+                                                                      s.pipeline.preprocess);
         break;
       case sensors::SensorType::kLidar:
         n.lidar = std::make_unique<sensors::Lidar>(n.config->sensor.lidar, world.scene());
+        n.lidar_pre = std::make_unique<pipeline::LidarPreprocessor>(n.config->sensor.lidar,
+                                                                    s.pipeline.preprocess);
         break;
       case sensors::SensorType::kFmcwRadar:
         n.radar = std::make_unique<sensors::FmcwRadar>(n.config->sensor.radar, world.scene());
         n.radar_processor = std::make_unique<sensors::RadarProcessor>(n.config->sensor.radar);
+        n.radar_pre = std::make_unique<pipeline::RadarPreprocessor>(n.config->sensor.radar,
+                                                                    s.pipeline.preprocess);
         break;
     }
     const auto& timing = n.config->sensor.timing();
@@ -161,15 +236,22 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
           const std::string modality = nd.config->sensor.modality();
           const double t_s = core::ToSeconds(t);
           std::uint64_t raw = 0;
+          auto content = std::make_shared<NodeContent>();
+          content->node_id = nd.config->id;
           if (nd.camera) {
             world.scene().SetTime(t_s);
             const sensors::StereoFrame frame = nd.camera->Capture(t_s, s.weather, nd.noise);
             raw = frame.RawBytes();
             if (recorder.Wants("camera")) recorder.RecordCamera(nd.config->id, frame);
+            content->camera = nd.camera_pre->Process(frame);
+            // The latent travels, not the crops: the edge's filter needs the geometry only.
+            content->camera->crop_left.clear();
+            content->camera->crop_right.clear();
           } else if (nd.lidar) {
             const sensors::PointCloudFrame frame = nd.lidar->Capture(t_s, s.weather, nd.noise);
             raw = frame.RawBytes();
             if (recorder.Wants("lidar")) recorder.RecordLidar(nd.config->id, frame);
+            content->points = nd.lidar_pre->Process(frame);
           } else if (nd.radar) {
             world.scene().SetTime(t_s);
             const sensors::RadarCube cube = nd.radar->Synthesize(
@@ -178,9 +260,11 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
                 nd.radar_processor->Process(cube, nd.radar->X_WR(), t_s);
             raw = cube.RawBytes();
             if (recorder.Wants("radar")) recorder.RecordRadar(nd.config->id, frame);
+            content->points = nd.radar_pre->Process(frame);
           }
           ++frames[modality];
           bytes.raw[modality] += raw;
+          bytes.preprocessed[modality] += PreprocessedBytes(*content);
           bytes.compressed[modality] += message_bytes;
           channel::Message m;
           m.node = nd.index;
@@ -188,6 +272,7 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
           m.sequence = nd.sequence++;
           m.t_capture_ns = t;
           m.payload_bytes = message_bytes;
+          m.content = std::move(content);
           edge.OnSent(m);
           link->Send(std::move(m));
         });
@@ -195,22 +280,40 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
     nodes.push_back(std::move(node));
   }
 
-  // The downlink beam, scored at the end of every alignment window. Until a
-  // localization method runs in the loop only the perfect beam (and the DFT
-  // codebook, if asked for) is scored.
+  // At every alignment window's deadline (its end plus the late allowance)
+  // the edge estimates the target's position at the window's end from
+  // whatever arrived; the base station then steers at each estimate and the
+  // downlink is scored. A method scores gain 0 in windows where it has no
+  // estimate yet.
   const double rain_db_per_km = channel::RainSpecificAttenuationDbPerKm(
       s.base_station.carrier_ghz, s.weather.rain_mm_h, channel::Polarization::kVertical, 0.0);
   channel::DownlinkScorer downlink(
-      s.base_station, rain_db_per_km, {},
+      s.base_station, rain_db_per_km,
+      ekf ? std::vector<std::string>{"ekf"} : std::vector<std::string>{},
       channel::SnrGridDb(s.outputs.snr_db.from, s.outputs.snr_db.to, s.outputs.snr_db.step),
       core::RngStream(s.seed, "base_station/downlink"));
+  results::CsvTable estimates({"t_s", "method", "x_m", "y_m", "z_m"});
+  std::map<std::string, RmseAccumulator> rmse;
+  const core::SimTime allowance = core::Seconds(s.pipeline.late_allowance_s);
   core::PeriodicProcess window_timer(
-      1.0 / s.pipeline.window_s, s.pipeline.window_s, [&](std::int64_t, core::SimTime t) {
-        const double t_s = core::ToSeconds(t);
+      1.0 / s.pipeline.window_s, s.pipeline.window_s + s.pipeline.late_allowance_s,
+      [&](std::int64_t, core::SimTime t_deadline) {
+        const double t_s = core::ToSeconds(t_deadline - allowance);  // the window's end
+        const Eigen::Vector3d truth_m = world.target().StateAt(t_s).position_m;
+        std::map<std::string, Eigen::Vector3d> estimated;
+        if (ekf) {
+          if (const auto p = ekf->EstimateAt(t_s)) estimated["ekf"] = *p;
+        }
+        for (const auto& [method, p] : estimated) {
+          using results::FormatFixed;
+          estimates.AddRow({FormatFixed(t_s, 6), method, FormatFixed(p.x(), 6),
+                            FormatFixed(p.y(), 6), FormatFixed(p.z(), 6)});
+          rmse[method].Add(p - truth_m);
+        }
         world.scene().SetTime(t_s);
-        downlink.AddWindow(world.target().StateAt(t_s).position_m, {}, world);
+        downlink.AddWindow(truth_m, estimated, world);
       });
-  window_timer.Start(sim, 0, t_end);
+  window_timer.Start(sim, 0, t_end + 1);  // a deadline at exactly t_end still runs
 
   // Once per simulated second: progress, and a look for termination signals.
   core::Progress progress("run " + s.name, s.duration_s, "sim s", o.quiet);
@@ -233,6 +336,7 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
 
   dir.WriteText("truth.csv", truth.str());
+  dir.WriteText("estimates.csv", estimates.str());
   dir.WriteText("rate_snr.csv", downlink.rates().Csv());
   results::PlotSpec plot;
   plot.title = "Achievable rate vs SNR (" + s.name + ")";
@@ -248,7 +352,21 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
   recorder.Finish();
 
   core::Json metrics = core::Json::object();
-  metrics["rmse_m"] = core::Json::object();  // filled as localization methods land
+  // Every method that ran has an entry; null when it never produced an
+  // estimate (e.g. a run shorter than the filter's warm-up).
+  core::Json rmse_json = core::Json::object();
+  core::Json windows_json = core::Json::object();
+  if (ekf) rmse["ekf"];
+  for (const auto& [method, acc] : rmse) {
+    rmse_json[method] = acc.count ? core::Json(acc.value()) : core::Json(nullptr);
+    windows_json[method] = acc.count;
+  }
+  metrics["rmse_m"] = rmse_json;
+  metrics["estimated_windows"] = windows_json;
+  if (runs("uavloc"))
+    metrics["unavailable_methods"] = {{"uavloc",
+                                       "no trained model yet: the learned pipeline is being built "
+                                       "(uavsim train is not available yet)"}};
   core::Json modalities = core::Json::object();
   for (const auto& [m, n] : frames) modalities[m] = {{"frames", n}};
   edge.WriteMetrics(modalities);
@@ -256,6 +374,7 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
   core::Json rates = core::Json::object();
   for (const char* m : kModalities)
     rates[m] = {{"raw", bytes.raw[m] / 1000.0 / s.duration_s},
+                {"preprocessed", bytes.preprocessed[m] / 1000.0 / s.duration_s},
                 {"compressed", bytes.compressed[m] / 1000.0 / s.duration_s}};
   metrics["data_rate_kBps"] = rates;
   metrics["sim_s"] = summary.sim_s;

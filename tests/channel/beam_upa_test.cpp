@@ -70,7 +70,7 @@ TEST_CASE("Upa: steering vectors of the DFT directions are orthogonal", "[channe
     }
 }
 
-TEST_CASE("Upa: angles and directions are inverse; theta azimuth, phi elevation", "[channel]") {
+TEST_CASE("Upa: angles and directions are inverse, theta azimuth, phi elevation", "[channel]") {
   for (const double theta : {-3.0, -1.2, 0.0, 0.5, 2.9})
     for (const double phi : {-1.2, -0.3, 0.0, 0.8, 1.5}) {
       const Eigen::Vector3d u = Upa::Direction(theta, phi);

@@ -419,7 +419,7 @@ TEST_CASE("Uplink: jitter is never negative and has the configured spread", "[ch
   }
 }
 
-TEST_CASE("Uplink: jitter reorders messages; a seed fixes every fate and delay", "[channel]") {
+TEST_CASE("Uplink: jitter reorders messages, a seed fixes every fate and delay", "[channel]") {
   LinkConfig c = QuietLink();
   c.latency_ms = 10.0;
   c.jitter.type = JitterType::kNormal;

@@ -114,8 +114,8 @@ Vector3d VisibleSurfacePoint(const Vector3d& size_m, const Vector3d& los, RngStr
 // about 5 points): in a fraction `coverage` of frames, 1 + Poisson(4) hits
 // on the visible surface, range noise along each beam.
 std::optional<PointObservation> SimulateLidar(const LidarConfig& c, const Vector3d& target,
-                                              const Vector3d& size_m, double t_s,
-                                              RngStream& rng, double coverage = 0.3) {
+                                              const Vector3d& size_m, double t_s, RngStream& rng,
+                                              double coverage = 0.3) {
   const Eigen::Isometry3d X = c.pose.ToIsometry();
   const Vector3d los = (target - X.translation()).normalized();
   if (los.dot(X.linear() * Vector3d::UnitX()) < std::cos(Deg(0.5 * c.fov_deg)) ||
@@ -155,8 +155,8 @@ std::optional<PointObservation> SimulateRadar(const FmcwRadarConfig& c, const Ve
   const Matrix3d R_WR = X.linear();
   const double lambda = kC / (c.carrier_ghz * 1e9);
   const double t_chirp = (c.chirp_duration_us + c.idle_time_us) * 1e-6;
-  const double dr = kC / (2 * c.bandwidth_mhz * 1e6 * (c.adc_samples / c.sample_rate_msps) /
-                          c.chirp_duration_us);
+  const double dr =
+      kC / (2 * c.bandwidth_mhz * 1e6 * (c.adc_samples / c.sample_rate_msps) / c.chirp_duration_us);
   const double dv = lambda / (2 * c.chirps_per_frame * t_chirp);
   const double v_max = lambda / (4 * t_chirp);
   const double du_y = 1.0 / (c.nx * c.spacing_x_wavelengths);
@@ -287,14 +287,20 @@ OrbitRun SimulateOrbit(uint64_t seed, double duration_s, double max_delay_s, dou
   };
   for (int k = 0; k * (1.0 / 30.0) < duration_s; ++k) {
     const double t = k / 30.0;
-    Event e{t, 0, "cam1",
+    Event e{t,
+            0,
+            "cam1",
             SimulateCamera(cam, run.truth->StateAt(t).position_m, 0.25, 0.2, t, rng, 0.005),
-            std::nullopt, std::nullopt};
+            std::nullopt,
+            std::nullopt};
     if (e.camera) add(std::move(e));
   }
   for (int k = 0; k * 0.1 < duration_s; ++k) {
     const double t = k * 0.1;
-    Event e{t, 0, "lidar1", std::nullopt,
+    Event e{t,
+            0,
+            "lidar1",
+            std::nullopt,
             SimulateLidar(s.lidar, run.truth->StateAt(t).position_m, size_m, t, rng),
             std::nullopt};
     if (e.points) add(std::move(e));
@@ -302,7 +308,10 @@ OrbitRun SimulateOrbit(uint64_t seed, double duration_s, double max_delay_s, dou
   for (int k = 0; k * (1.0 / 15.0) < duration_s; ++k) {
     const double t = k / 15.0;
     const auto st = run.truth->StateAt(t);
-    Event e{t, 0, "radar1", std::nullopt,
+    Event e{t,
+            0,
+            "radar1",
+            std::nullopt,
             SimulateRadar(s.radar, st.position_m, st.velocity_mps, RadarTruthNoise{}, t, rng),
             std::nullopt};
     if (e.points) add(std::move(e));
@@ -430,8 +439,8 @@ TEST_CASE("Ekf: radar Jacobian matches finite differences", "[pipeline]") {
     const Matrix3d R_WR = (Eigen::AngleAxisd(rng.Uniform(-kPi, kPi), Vector3d::UnitZ()) *
                            Eigen::AngleAxisd(rng.Uniform(-0.6, 0.6), Vector3d::UnitY()))
                               .toRotationMatrix();
-    const Vector3d p = radar + R_WR * Vector3d(rng.Uniform(5, 80), rng.Uniform(-30, 30),
-                                               rng.Uniform(-20, 20));
+    const Vector3d p =
+        radar + R_WR * Vector3d(rng.Uniform(5, 80), rng.Uniform(-30, 30), rng.Uniform(-20, 20));
     const Vector3d v = 5 * NormalVector(rng);
     const auto J = uavsim::pipeline::RadarJacobian(p, v, radar, R_WR);
     const double h = 1e-6;
@@ -476,8 +485,8 @@ TEST_CASE("Ekf: stereo triangulation of exact rays returns the point", "[pipelin
   CHECK((skew->point_w - Vector3d(10, 0, 1)).norm() < 1e-9);
   CHECK(skew->gap_m == Approx(2.0));
   // Parallel rays, and rays meeting behind the eyes, triangulate nothing.
-  CHECK_FALSE(uavsim::pipeline::TriangulateMidpoint(left, Vector3d::UnitY(), right,
-                                                    Vector3d::UnitY()));
+  CHECK_FALSE(
+      uavsim::pipeline::TriangulateMidpoint(left, Vector3d::UnitY(), right, Vector3d::UnitY()));
   CHECK_FALSE(uavsim::pipeline::TriangulateMidpoint(left, -(p - left).normalized(), right,
                                                     -(p - right).normalized()));
 }
@@ -572,8 +581,7 @@ void PropagateTruth(double q, double dt, Vector3d& p, Vector3d& v, RngStream& rn
 
 }  // namespace
 
-TEST_CASE("Ekf: NEES over 200 Monte-Carlo runs lies in the 95% chi-square interval",
-          "[pipeline]") {
+TEST_CASE("Ekf: NEES over 200 Monte-Carlo runs lies in the 95% chi-square interval", "[pipeline]") {
   // Every measurement is drawn here from the noise the filter states: fixes
   // with a given covariance, radar detections with resolution / sqrt(2 SNR)
   // plus the per-frame floors, camera pixels through Mei's model.
@@ -587,10 +595,9 @@ TEST_CASE("Ekf: NEES over 200 Monte-Carlo runs lies in the 95% chi-square interv
   const auto res = uavsim::pipeline::RadarResolutionOf(s.radar);
   const Matrix3d R_WR = s.radar.pose.ToIsometry().linear();
   const Vector3d radar_w = s.radar.pose.position_m;
-  const Matrix3d fix_cov =
-      Eigen::AngleAxisd(0.4, Vector3d(1, 1, 0).normalized()) *
-      Eigen::Vector3d(0.3 * 0.3, 0.2 * 0.2, 0.1 * 0.1).asDiagonal() *
-      Eigen::AngleAxisd(-0.4, Vector3d(1, 1, 0).normalized());
+  const Matrix3d fix_cov = Eigen::AngleAxisd(0.4, Vector3d(1, 1, 0).normalized()) *
+                           Eigen::Vector3d(0.3 * 0.3, 0.2 * 0.2, 0.1 * 0.1).asDiagonal() *
+                           Eigen::AngleAxisd(-0.4, Vector3d(1, 1, 0).normalized());
   const double q = Ekf(config).CvAccelPsd();
   const int runs = 200, deadlines = 50;
   std::vector<double> nees_sum(deadlines, 0.0);
@@ -629,10 +636,11 @@ TEST_CASE("Ekf: NEES over 200 Monte-Carlo runs lies in the 95% chi-square interv
           const double uz = d.z() / d.norm() + rng.Normal(0, k * res.direction_cosine_z);
           const double el0 = std::asin(uz);
           const double az = std::asin(uy / std::cos(el0)) + ca, el = el0 + ce;
-          const Vector3d x = radar_w + R_WR * (range * Vector3d(std::cos(el) * std::cos(az),
-                                                                std::cos(el) * std::sin(az),
-                                                                std::sin(el)));
-          const double vr = (p - radar_w).normalized().dot(v) + rng.Normal(0, k * res.velocity_mps) + cv;
+          const Vector3d x =
+              radar_w + R_WR * (range * Vector3d(std::cos(el) * std::cos(az),
+                                                 std::cos(el) * std::sin(az), std::sin(el)));
+          const double vr =
+              (p - radar_w).normalized().dot(v) + rng.Normal(0, k * res.velocity_mps) + cv;
           for (double val : {x.x(), x.y(), x.z(), vr, 20.0})
             o.values.push_back(static_cast<float>(val));
         }
@@ -651,7 +659,8 @@ TEST_CASE("Ekf: NEES over 200 Monte-Carlo runs lies in the 95% chi-square interv
     }
     ekf.StateAt(20.0);  // commit everything for the NIS counters
     nis_per_dof_sum += (ekf.stats("fix").MeanNisPerDof() + ekf.stats("radar1").MeanNisPerDof() +
-                        ekf.stats("cam1").MeanNisPerDof()) / 3.0;
+                        ekf.stats("cam1").MeanNisPerDof()) /
+                       3.0;
   }
   // runs * average NEES ~ chi2(6 runs): the two-sided 95 % interval.
   const double lo = ChiSquareWilsonHilferty(6.0 * runs, -1.959964) / runs;
@@ -662,9 +671,10 @@ TEST_CASE("Ekf: NEES over 200 Monte-Carlo runs lies in the 95% chi-square interv
     inside += (sum / runs >= lo && sum / runs <= hi);
     mean += sum / runs / deadlines;
   }
-  std::printf("NEES (6 dof, %d runs): mean %.3f over %d deadlines, %d inside [%.3f, %.3f]; "
-              "mean NIS per dof %.3f\n",
-              runs, mean, deadlines, inside, lo, hi, nis_per_dof_sum / runs);
+  std::printf(
+      "NEES (6 dof, %d runs): mean %.3f over %d deadlines, %d inside [%.3f, %.3f]; "
+      "mean NIS per dof %.3f\n",
+      runs, mean, deadlines, inside, lo, hi, nis_per_dof_sum / runs);
   // The deadlines of one run are correlated, so the count inside scatters
   // more than a binomial would; an honest filter keeps most inside and the
   // mean at 6.
@@ -766,14 +776,15 @@ TEST_CASE("Ekf: an observation older than the reorder window is dropped and coun
   CHECK(*ekf.EstimateAt(2.0) != before);  // within the window: applied in its place
 }
 
-TEST_CASE("Ekf: coasting stops at max_gap_s; after it two consistent fixes restart the track",
+TEST_CASE("Ekf: coasting stops at max_gap_s, after it two consistent fixes restart the track",
           "[pipeline]") {
-  EkfConfig config;  // max_gap_s 1
+  EkfConfig config;
+  config.max_gap_s = 1.0;
   Ekf ekf(config);
   ekf.AddPositionSource("fix");
   for (int k = 0; k <= 20; ++k)
-    ekf.Observe("fix", PositionFix{0.1 * k, Vector3d(2.0 * 0.1 * k, 0, 30),
-                                   0.01 * Matrix3d::Identity()});
+    ekf.Observe("fix",
+                PositionFix{0.1 * k, Vector3d(2.0 * 0.1 * k, 0, 30), 0.01 * Matrix3d::Identity()});
   const Vector3d at_3 = *ekf.EstimateAt(3.0);
   CHECK(at_3.x() == Approx(6.0).epsilon(0.01));  // 2 m/s for 1 s past the last fix at 2.0
   CHECK(*ekf.EstimateAt(3.5) == at_3);           // held beyond max_gap_s
@@ -796,13 +807,16 @@ TEST_CASE("Ekf: false alarms neither replace a confirmed track nor start one", "
   // false alarm can be as plausible as the truth: nothing measures range.)
   const Sensors s = DefaultSensors();
   const MeiCamera cam(s.camera);
-  Ekf ekf{EkfConfig{}};
-  ekf.AddCamera("cam1", s.camera);
-  ekf.AddRadar("radar1", s.radar);
-  ekf.AddPositionSource("fix");
+  Ekf ekf{EkfConfig{}}, twin{EkfConfig{}};  // the twin sees no false alarm
+  for (Ekf* e : {&ekf, &twin}) {
+    e->AddCamera("cam1", s.camera);
+    e->AddRadar("radar1", s.radar);
+    e->AddPositionSource("fix");
+  }
   RngStream rng(8, "false-alarms");
   const Vector3d p(0, 0, 30);
-  for (double t : {0.0, 0.1}) ekf.Observe("fix", PositionFix{t, p, 0.01 * Matrix3d::Identity()});
+  for (double t : {0.0, 0.1})
+    for (Ekf* e : {&ekf, &twin}) e->Observe("fix", PositionFix{t, p, 0.01 * Matrix3d::Identity()});
   // Across the camera's line of sight (the direction it measures), horizontally.
   const Vector3d off_ray = (p - cam.eye_left).cross(Vector3d::UnitZ()).normalized();
   auto false_alarm = [&](double t, const Vector3d& x) {
@@ -815,13 +829,16 @@ TEST_CASE("Ekf: false alarms neither replace a confirmed track nor start one", "
   };
   for (int k = 4; k <= 90; ++k) {
     const double t = k / 30.0;
-    ekf.Observe("cam1", *SimulateCamera(cam, p, 0.25, 0.2, t, rng));
+    const CameraObservation o = *SimulateCamera(cam, p, 0.25, 0.2, t, rng);
+    ekf.Observe("cam1", o);
+    twin.Observe("cam1", o);
     if (k % 15 == 0) false_alarm(t, p + rng.Uniform(10, 25) * off_ray);
   }
   const auto e = ekf.StateAt(3.0);
   REQUIRE(e);
-  CHECK((e->position_m - p).norm() < 0.5);
-  ekf.StateAt(10.0);  // commit
+  CHECK(e->position_m == twin.StateAt(3.0)->position_m);  // as if they had not come
+  CHECK((e->position_m - p).norm() < 1.0);                // 3 s without ranging: the range drifts
+  ekf.StateAt(10.0);                                      // commit
   CHECK(ekf.stats("radar1").rejected == 6);
   CHECK(ekf.stats("radar1").initiations == 0);
 
@@ -854,8 +871,8 @@ TEST_CASE("Ekf: IMM mode probabilities follow the manoeuvre", "[pipeline]") {
   double mu_cv_before = 0.0, mu_cv_onset = 0.0, mu_ca_turning = 0.0;
   for (int k = 0; k <= 280; ++k) {
     const double t = 0.05 * k;
-    ekf.Observe("fix", PositionFix{t, truth(t) + 0.05 * NormalVector(rng),
-                                   0.0025 * Matrix3d::Identity()});
+    ekf.Observe("fix",
+                PositionFix{t, truth(t) + 0.05 * NormalVector(rng), 0.0025 * Matrix3d::Identity()});
     const double mu_cv = k > 0 ? ekf.StateAt(t)->mode_probabilities[0] : 0.0;
     if (k == 199) mu_cv_before = mu_cv;
     if (k > 200 && k <= 210) mu_cv_onset = std::max(mu_cv_onset, mu_cv);
@@ -903,8 +920,7 @@ TEST_CASE("Ekf: errors name the node", "[pipeline]") {
   };
   CHECK(message([&] { ekf.AddLidar("lidar1", LidarConfig{}); }) ==
         "Ekf: node \"lidar1\" is already registered");
-  CHECK(message([&] { ekf.Observe("cam9", CameraObservation{}); }) ==
-        "Ekf: unknown node \"cam9\"");
+  CHECK(message([&] { ekf.Observe("cam9", CameraObservation{}); }) == "Ekf: unknown node \"cam9\"");
   CHECK(message([&] { ekf.Observe("lidar1", CameraObservation{}); }) ==
         "Ekf: node \"lidar1\" was registered for another kind of observation");
   PointObservation radar_points;
@@ -933,7 +949,9 @@ TEST_CASE("EkfConfig: rules name the field, the value and the rule", "[pipeline]
                  Catch::Contains("got 1"));
   CHECK_THAT(error_of(R"({"motion_model": "ukf"})"), Catch::Contains("\"cv\", \"imm\""));
   CHECK_THAT(error_of(R"({"gate_probabilty": 0.9})"), Catch::Contains("gate_probability"));
-  CHECK(error_of(R"({"motion_model": "cv", "target_size_m": [1, 1, 0.3]})").empty());
+  CHECK(error_of(R"({"motion_model": "cv"})").empty());
+  // The target's limits and size come from uavs[0], not from here.
+  CHECK_THAT(error_of(R"({"target_size_m": [1, 1, 0.3]})"), Catch::Contains("unknown key"));
   // Every default survives a round trip through JSON.
   EkfConfig back;
   back.max_gap_s = 7.0;
@@ -944,16 +962,17 @@ TEST_CASE("EkfConfig: rules name the field, the value and the rule", "[pipeline]
 
 // --- Fusion on the default scenario's orbit. ---
 
-TEST_CASE("Ekf: on the default orbit, fusing the three sensors beats each alone",
-          "[pipeline]") {
+TEST_CASE("Ekf: on the default orbit, fusing the three sensors beats each alone", "[pipeline]") {
   // 3 x 60 s of the orbit (25 m radius, 6 m/s) seen by the default
   // scenario's sensors: camera 30 Hz, LiDAR 10 Hz, radar 15 Hz; 20 % of the
   // frames lost, the rest up to 0.15 s late. RMSE from t = 5 s.
   std::vector<OrbitRun> runs;
   for (uint64_t seed : {1, 2, 3}) runs.push_back(SimulateOrbit(seed, 60.0, 0.15, 0.2));
   const std::vector<std::pair<std::string, std::vector<std::string>>> sets{
-      {"all", {"cam1", "lidar1", "radar1"}}, {"lidar+radar", {"lidar1", "radar1"}},
-      {"lidar", {"lidar1"}},                 {"radar", {"radar1"}},
+      {"all", {"cam1", "lidar1", "radar1"}},
+      {"lidar+radar", {"lidar1", "radar1"}},
+      {"lidar", {"lidar1"}},
+      {"radar", {"radar1"}},
       {"camera", {"cam1"}}};
   for (EkfMotionModel model : {EkfMotionModel::kImm, EkfMotionModel::kConstantVelocity}) {
     EkfConfig config;
@@ -986,10 +1005,10 @@ TEST_CASE("Ekf: on the default orbit, fusing the three sensors beats each alone"
 TEST_CASE("Ekf: process-noise sweep (tuning record)", "[.][tuning][pipeline]") {
   using uavsim::core::TrajectoryType;
   std::vector<std::pair<std::string, uavsim::core::TrajectoryConfig>> trajectories;
-  for (auto [name, type] : {std::pair{"orbit", TrajectoryType::kOrbit},
-                            std::pair{"figure8", TrajectoryType::kFigure8},
-                            std::pair{"waypoints", TrajectoryType::kWaypoints},
-                            std::pair{"random", TrajectoryType::kRandom}}) {
+  for (auto [name, type] :
+       {std::pair{"orbit", TrajectoryType::kOrbit}, std::pair{"figure8", TrajectoryType::kFigure8},
+        std::pair{"waypoints", TrajectoryType::kWaypoints},
+        std::pair{"random", TrajectoryType::kRandom}}) {
     uavsim::core::TrajectoryConfig t;
     t.type = type;
     if (type == TrajectoryType::kRandom) {  // near the sensors' fields of view
@@ -998,38 +1017,47 @@ TEST_CASE("Ekf: process-noise sweep (tuning record)", "[.][tuning][pipeline]") {
     }
     trajectories.emplace_back(name, t);
   }
+  // 8 simulated minutes per type; the RMSE over all of them and, since a
+  // few lost-track episodes dominate the waypoint runs, the median per run.
+  constexpr std::size_t kSeeds = 8;
   std::vector<OrbitRun> runs;
   for (const auto& [name, t] : trajectories)
-    for (uint64_t seed : {21, 22}) runs.push_back(SimulateOrbit(seed, 60.0, 0.15, 0.2, t));
+    for (uint64_t seed = 100; seed < 100 + kSeeds; ++seed)
+      runs.push_back(SimulateOrbit(seed, 60.0, 0.15, 0.2, t));
   auto report = [&](const std::string& label, const EkfConfig& config) {
-    std::printf("%-34s", label.c_str());
-    for (std::size_t i = 0; i < runs.size(); i += 2) {
-      double ms = 0.0;
-      for (std::size_t j = i; j < i + 2; ++j) {
+    std::printf("%-26s", label.c_str());
+    for (std::size_t i = 0; i < runs.size(); i += kSeeds) {
+      double sum = 0.0;
+      int n = 0;
+      std::vector<double> per_run;
+      for (std::size_t j = i; j < i + kSeeds; ++j) {
         const RmseResult r = RunFilter(runs[j], config, {"cam1", "lidar1", "radar1"}, 60.0, 5.0);
-        ms += r.rmse_m * r.rmse_m / 2;
+        sum += r.sum_sq_m2;
+        n += r.fixes;
+        per_run.push_back(r.rmse_m);
       }
-      std::printf(" %-9s %.4f", trajectories[i / 2].first.c_str(), std::sqrt(ms));
+      std::sort(per_run.begin(), per_run.end());
+      std::printf(" %s %.3f (median %.3f)", trajectories[i / kSeeds].first.c_str(),
+                  std::sqrt(sum / n), 0.5 * (per_run[kSeeds / 2 - 1] + per_run[kSeeds / 2]));
     }
     std::printf("\n");
   };
-  EkfConfig config;
-  config.motion_model = EkfMotionModel::kConstantVelocity;
-  for (double f : {0.05, 0.1, 0.2, 0.3, 0.5, 1.0})
-    report("cv  cv_accel_fraction " + std::to_string(f), [&] {
-      EkfConfig c = config;
-      c.cv_accel_fraction = f;
-      return c;
-    }());
-  config.motion_model = EkfMotionModel::kImm;
-  for (double cv : {0.02, 0.05, 0.1})
-    for (double ca : {0.1, 0.3, 1.0})
-      report("imm cv " + std::to_string(cv) + " ca " + std::to_string(ca), [&] {
-        EkfConfig c = config;
-        c.imm_cv_accel_fraction = cv;
-        c.imm_ca_jerk_fraction = ca;
-        return c;
-      }());
+  char label[64];
+  for (double f : {0.1, 0.2, 0.3, 0.5}) {
+    EkfConfig c;
+    c.motion_model = EkfMotionModel::kConstantVelocity;
+    c.cv_accel_fraction = f;
+    std::snprintf(label, sizeof label, "cv  accel %.2f", f);
+    report(label, c);
+  }
+  for (double cv : {0.1, 0.3, 0.5})
+    for (double ca : {0.05, 0.1, 0.2, 0.3}) {
+      EkfConfig c;
+      c.imm_cv_accel_fraction = cv;
+      c.imm_ca_jerk_fraction = ca;
+      std::snprintf(label, sizeof label, "imm cv %.2f ca jerk %.2f", cv, ca);
+      report(label, c);
+    }
 }
 
 TEST_CASE("Ekf: per-node consistency on the orbit (diagnostics)", "[.][tuning][pipeline]") {

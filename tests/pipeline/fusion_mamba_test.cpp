@@ -191,7 +191,7 @@ TEST_CASE("MambaBlock: the recurrent step equals the full-sequence scan", "[pipe
   CHECK(short_state.conv.select(2, 0).abs().max().item<float>() == 0.0f);
 }
 
-TEST_CASE("MambaRegressor: shapes; step equals scan through the layers", "[pipeline]") {
+TEST_CASE("MambaRegressor: shapes, step equals scan through the layers", "[pipeline]") {
   InitTorch(1, 14);
   MambaRegressorOptions o;
   o.input_dim = 48;

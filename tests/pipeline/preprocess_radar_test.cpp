@@ -81,7 +81,7 @@ TEST_CASE("RadarPreprocessor: velocity separates co-located clusters when weight
   for (std::size_t i = 0; i < obs.count(); ++i) CHECK(obs.values[5 * i + 3] == -6.0f);
 }
 
-TEST_CASE("RadarPreprocessor: at most 1024 points; raw keeps every detection", "[pipeline]") {
+TEST_CASE("RadarPreprocessor: at most 1024 points, raw keeps every detection", "[pipeline]") {
   core::RngStream rng(3, "preprocess_radar_test/cap");
   const auto big = Cluster({30.0, 0.0, 20.0}, 3000, -3.0, rng);
   const RadarPreprocessor pre(Sensor(), PreprocessConfig{});

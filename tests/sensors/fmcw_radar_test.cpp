@@ -576,7 +576,7 @@ TEST_CASE("FmcwRadar: ground multipath adds the image paths of a moving scattere
   }
 }
 
-TEST_CASE("FmcwRadar: same seed, same cube; one or two threads, same cube", "[sensors]") {
+TEST_CASE("FmcwRadar: same seed, same cube, one or two threads, same cube", "[sensors]") {
   WorldGeometry w;
   w.meshes.push_back(Box({25, -10, -3}, {26, 10, 8}, uavsim::core::kMaterialGlass));
   w.meshes.push_back(Box({-100, -100, -2}, {100, 100, -1.5f}, uavsim::core::kMaterialGround));

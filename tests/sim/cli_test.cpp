@@ -101,7 +101,8 @@ TEST_CASE("CLI: run writes the run directory of DESIGN.md", "[sim]") {
   REQUIRE(r.exit_code == 0);
   CHECK(r.out.empty());
   CHECK(r.err.empty());
-  for (const char* f : {"manifest.json", "truth.csv", "metrics.json"})
+  for (const char* f :
+       {"manifest.json", "truth.csv", "metrics.json", "estimates.csv", "rate_snr.csv"})
     CHECK(fs::exists(out + "/" + f));
 
   const std::string truth = ReadFile(out + "/truth.csv");
@@ -129,7 +130,14 @@ TEST_CASE("CLI: run writes the run directory of DESIGN.md", "[sim]") {
   // Raw camera data rate: two 640 x 480 8-bit images at 30 Hz.
   CHECK(metrics["data_rate_kBps"]["camera"]["raw"].get<double>() ==
         Approx(2 * 640 * 480 * 30 / 1000.0));
-  CHECK(ReadFile(out + "/rate_snr.csv").rfind("snr_db,beam,rate_bps_hz\n", 0) == 0);
+  const std::string rates = ReadFile(out + "/rate_snr.csv");
+  CHECK(rates.rfind("snr_db,beam,rate_bps_hz\n", 0) == 0);
+  CHECK(rates.find(",perfect,") != std::string::npos);
+  // The classical baseline runs in the loop: its estimates, RMSE and beam.
+  CHECK(ReadFile(out + "/estimates.csv").rfind("t_s,method,x_m,y_m,z_m\n", 0) == 0);
+  CHECK(metrics["rmse_m"].contains("ekf"));
+  CHECK(rates.find(",ekf,") != std::string::npos);
+  CHECK(metrics["unavailable_methods"].contains("uavloc"));
 
   const Json manifest = Json::parse(ReadFile(out + "/manifest.json"));
   CHECK(manifest["seed"] == 1);
@@ -147,7 +155,7 @@ TEST_CASE("CLI: run writes the run directory of DESIGN.md", "[sim]") {
   CHECK(CountLines(ReadFile(out + "/truth.csv")) == 1 + 2 * 20);
 }
 
-TEST_CASE("CLI: the same scenario and seed give byte-identical files; another seed differs",
+TEST_CASE("CLI: the same scenario and seed give byte-identical files, another seed differs",
           "[sim]") {
   const std::string dir = TempDir("determinism");
   // A random trajectory and clock jitter: everything that draws random numbers.
