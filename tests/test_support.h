@@ -2,9 +2,12 @@
 // it says; temporary folders; the message of a ConfigError.
 #pragma once
 
+#include <Eigen/Core>
 #include <functional>
 #include <string>
 #include <vector>
+
+#include "sim/core/world_geometry.h"
 
 namespace uavsim::testing {
 
@@ -23,6 +26,10 @@ std::string TempDir(const std::string& tag);
 
 std::string ReadFile(const std::string& path);
 void WriteFile(const std::string& path, const std::string& content);
+
+// An axis-aligned box [lo, hi] as 12 outward-wound triangles.
+core::TriangleMesh BoxMesh(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi,
+                           std::uint32_t material);
 
 // The what() of the core::ConfigError that `f` throws, or "" if none.
 std::string ConfigErrorOf(const std::function<void()>& f);

@@ -10,12 +10,14 @@
 
 #include <algorithm>
 #include <catch2/catch.hpp>
+
 #include <cmath>
 #include <complex>
 #include <cstring>
 #include <functional>
 #include <string>
 #include <vector>
+#include "test_support.h"
 
 #include "channel/rain_attenuation.h"
 #include "sim/core/error.h"
@@ -34,28 +36,13 @@ using uavsim::sensors::RadarSurfaceConfig;
 using uavsim::sensors::RaycastScene;
 using uavsim::sensors::Scatterer;
 
+using uavsim::testing::BoxMesh;
+
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kC = 299792458.0;
 constexpr double kBoltzmann = 1.380649e-23;
-
-// An axis-aligned box [lo, hi] as 12 outward-wound triangles.
-TriangleMesh Box(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi, std::uint32_t material) {
-  TriangleMesh m;
-  m.name = "box";
-  m.material = material;
-  for (int i = 0; i < 8; ++i)
-    m.vertices_m.emplace_back(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(),
-                              i & 4 ? hi.z() : lo.z());
-  const std::uint32_t q[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
-                                 {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-  for (const auto& f : q) {
-    m.triangles.push_back({f[0], f[1], f[2]});
-    m.triangles.push_back({f[0], f[2], f[3]});
-  }
-  return m;
-}
 
 // The default radar at `position`, rpy in degrees, without thermal noise.
 FmcwRadarConfig Quiet(const Eigen::Vector3d& position = Eigen::Vector3d::Zero(),
@@ -258,9 +245,9 @@ TEST_CASE("FmcwRadar: a wall at known distance gives scatterers on it with its R
   const double d = 20.0, y0 = -6.0, y1 = 6.0, z0 = -4.0, z1 = 4.0;
   WorldGeometry w;
   w.meshes.push_back(
-      Box({static_cast<float>(d), static_cast<float>(y0), static_cast<float>(z0)},
-          {static_cast<float>(d + 1), static_cast<float>(y1), static_cast<float>(z1)},
-          uavsim::core::kMaterialConcrete));
+      BoxMesh({static_cast<float>(d), static_cast<float>(y0), static_cast<float>(z0)},
+              {static_cast<float>(d + 1), static_cast<float>(y1), static_cast<float>(z1)},
+              uavsim::core::kMaterialConcrete));
   RaycastScene scene(w);
   FmcwRadarConfig c = Quiet();
   const std::vector<Scatterer> s = FmcwRadar(c, scene).FindScatterers(0.0);
@@ -309,7 +296,7 @@ TEST_CASE("FmcwRadar: a wall at known distance gives scatterers on it with its R
 
 TEST_CASE("FmcwRadar: a moving box gives scatterers on it with its velocity", "[sensors]") {
   const Eigen::Vector3d p0(30.0, 2.0, 1.0), v(-3.0, 4.0, 1.0);
-  MovingScene m(Box({-0.5f, -0.5f, -0.5f}, {0.5f, 0.5f, 0.5f}, uavsim::core::kMaterialMetal),
+  MovingScene m(BoxMesh({-0.5f, -0.5f, -0.5f}, {0.5f, 0.5f, 0.5f}, uavsim::core::kMaterialMetal),
                 [&](double t) { return At(p0 + v * t); });
   const double t = 0.7;
   m.scene->SetTime(t);
@@ -333,8 +320,8 @@ TEST_CASE("FmcwRadar: a UAV's total RCS is gamma times its projected area, 0.01-
     const Eigen::Vector3d size(0.5, 0.5, 0.2);
     for (const Eigen::Vector3d& p :
          {Eigen::Vector3d(40, 0, 10), Eigen::Vector3d(30, 15, 20), Eigen::Vector3d(70, -20, 25)}) {
-      MovingScene m(Box((-0.5 * size).cast<float>(), (0.5 * size).cast<float>(),
-                        uavsim::core::kMaterialDrone),
+      MovingScene m(BoxMesh((-0.5 * size).cast<float>(), (0.5 * size).cast<float>(),
+                            uavsim::core::kMaterialDrone),
                     [&](double) { return At(p); });
       m.scene->SetTime(0.0);
       const FmcwRadar radar(c, *m.scene);
@@ -476,7 +463,7 @@ TEST_CASE("FmcwRadar: rain clutter power follows its eta law over the visible fi
     FmcwRadarConfig from5 = c;
     from5.rain_clutter_min_range_m = 5.0;
     WorldGeometry w;
-    w.meshes.push_back(Box({10, -100, -100}, {11, 100, 100}, uavsim::core::kMaterialConcrete));
+    w.meshes.push_back(BoxMesh({10, -100, -100}, {11, 100, 100}, uavsim::core::kMaterialConcrete));
     RaycastScene scene(w);
     const FmcwRadar radar(from5, scene);
     const double expected = ExpectedRainPower(
@@ -537,10 +524,10 @@ TEST_CASE("FmcwRadar: rain seen upward approaches at the mean fall speed times s
 
 TEST_CASE("FmcwRadar: ground multipath adds the image paths of a moving scatterer", "[sensors]") {
   WorldGeometry ground;
-  ground.meshes.push_back(Box({-200, -200, -1}, {200, 200, 0}, uavsim::core::kMaterialGround));
+  ground.meshes.push_back(BoxMesh({-200, -200, -1}, {200, 200, 0}, uavsim::core::kMaterialGround));
   const Eigen::Vector3d p(20.0, 0.0, 3.0);
   MovingScene m(
-      Box({-0.1f, -0.1f, -0.1f}, {0.1f, 0.1f, 0.1f}, uavsim::core::kMaterialDrone),
+      BoxMesh({-0.1f, -0.1f, -0.1f}, {0.1f, 0.1f, 0.1f}, uavsim::core::kMaterialDrone),
       [&](double) { return At(p); }, ground);
   m.scene->SetTime(0.0);
   FmcwRadarConfig c = Quiet({0.0, 0.0, 1.5});
@@ -578,8 +565,8 @@ TEST_CASE("FmcwRadar: ground multipath adds the image paths of a moving scattere
 
 TEST_CASE("FmcwRadar: same seed, same cube, one or two threads, same cube", "[sensors]") {
   WorldGeometry w;
-  w.meshes.push_back(Box({25, -10, -3}, {26, 10, 8}, uavsim::core::kMaterialGlass));
-  w.meshes.push_back(Box({-100, -100, -2}, {100, 100, -1.5f}, uavsim::core::kMaterialGround));
+  w.meshes.push_back(BoxMesh({25, -10, -3}, {26, 10, 8}, uavsim::core::kMaterialGlass));
+  w.meshes.push_back(BoxMesh({-100, -100, -2}, {100, 100, -1.5f}, uavsim::core::kMaterialGround));
   const Eigen::Vector3d p0(18.0, -3.0, 2.0), v(2.0, 3.0, 0.5);
   MovingScene m(
       uavsim::core::MakeQuadrotorMesh({0.5, 0.5, 0.2}),

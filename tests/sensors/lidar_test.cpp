@@ -9,12 +9,14 @@
 
 #include <algorithm>
 #include <catch2/catch.hpp>
+
 #include <cmath>
 #include <cstring>
 #include <functional>
 #include <set>
 #include <string>
 #include <vector>
+#include "test_support.h"
 
 #include "sensors/ply_io.h"
 #include "sim/core/error.h"
@@ -34,26 +36,11 @@ using uavsim::sensors::LidarReturnMode;
 using uavsim::sensors::PointCloudFrame;
 using uavsim::sensors::RaycastScene;
 
+using uavsim::testing::BoxMesh;
+
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-
-// An axis-aligned box [lo, hi] as 12 outward-wound triangles.
-TriangleMesh Box(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi, std::uint32_t material) {
-  TriangleMesh m;
-  m.name = "box";
-  m.material = material;
-  for (int i = 0; i < 8; ++i)
-    m.vertices_m.emplace_back(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(),
-                              i & 4 ? hi.z() : lo.z());
-  const std::uint32_t q[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
-                                 {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-  for (const auto& f : q) {
-    m.triangles.push_back({f[0], f[1], f[2]});
-    m.triangles.push_back({f[0], f[2], f[3]});
-  }
-  return m;
-}
 
 // A world whose last material has exactly the given LiDAR reflectivity.
 WorldGeometry WorldWith(double reflectivity, std::uint32_t* material) {
@@ -67,7 +54,7 @@ WorldGeometry WorldWith(double reflectivity, std::uint32_t* material) {
 WorldGeometry Wall(double d, double y0, double y1, double z0, double z1, double reflectivity) {
   std::uint32_t m;
   WorldGeometry w = WorldWith(reflectivity, &m);
-  w.meshes.push_back(Box(Eigen::Vector3f(d, y0, z0), Eigen::Vector3f(d + 1.0, y1, z1), m));
+  w.meshes.push_back(BoxMesh(Eigen::Vector3f(d, y0, z0), Eigen::Vector3f(d + 1.0, y1, z1), m));
   return w;
 }
 
@@ -205,7 +192,7 @@ TEST_CASE("Lidar: ranges to a box's faces match the slab-method distance", "[sen
   std::uint32_t m;
   WorldGeometry w = WorldWith(0.3, &m);
   const Eigen::Vector3d lo(10, -1, -1), hi(12, 1, 1.5);
-  w.meshes.push_back(Box(lo.cast<float>(), hi.cast<float>(), m));
+  w.meshes.push_back(BoxMesh(lo.cast<float>(), hi.cast<float>(), m));
   LidarConfig c = QuietSpinning();
   c.pose.position_m = {0.0, -4.0, 0.2};  // sees the face x = 10 and the face y = -1
   c.azimuth_resolution_deg = 0.1;
@@ -317,7 +304,7 @@ TEST_CASE("Lidar: fog and rain shorten the detection range as Beer-Lambert predi
 TEST_CASE("Lidar: backscatter echoes appear only in weather, near the sensor", "[sensors]") {
   std::uint32_t m;
   WorldGeometry w = WorldWith(0.2, &m);
-  w.meshes.push_back(Box({-300, -300, -2}, {300, 300, -1.5}, m));  // ground at z = -1.5
+  w.meshes.push_back(BoxMesh({-300, -300, -2}, {300, 300, -1.5}, m));  // ground at z = -1.5
   LidarConfig c = QuietSpinning();
   c.min_range_m = 1.0;
   c.full_overlap_range_m = 10.0;
@@ -397,7 +384,7 @@ TEST_CASE("Lidar: a target moving sideways is smeared by v times the sweep time"
     std::uint32_t m;
     WorldGeometry world = WorldWith(0.4, &m);
     RaycastScene scene(world);
-    scene.AddMovingObject(Box({-0.5f, -1.0f, -1.0f}, {0.5f, 1.0f, 1.0f}, m), [=](double t) {
+    scene.AddMovingObject(BoxMesh({-0.5f, -1.0f, -1.0f}, {0.5f, 1.0f, 1.0f}, m), [=](double t) {
       Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
       X.translation() = Eigen::Vector3d(d + 0.5, y0 + speed * t, 0.0);
       return X;
@@ -434,8 +421,8 @@ TEST_CASE("Lidar: a target moving sideways is smeared by v times the sweep time"
 TEST_CASE("Lidar: one seed gives one cloud, whatever the number of threads", "[sensors]") {
   std::uint32_t m;
   WorldGeometry w = WorldWith(0.3, &m);
-  w.meshes.push_back(Box({-100, -100, -2}, {100, 100, -1.5}, m));
-  w.meshes.push_back(Box({15, -5, -1.5}, {16, 5, 6}, m));
+  w.meshes.push_back(BoxMesh({-100, -100, -2}, {100, 100, -1.5}, m));
+  w.meshes.push_back(BoxMesh({15, -5, -1.5}, {16, 5, 6}, m));
   LidarConfig c = QuietSpinning();
   c.range_noise_m = 0.03;
   c.dropout = 0.1;
@@ -445,7 +432,7 @@ TEST_CASE("Lidar: one seed gives one cloud, whatever the number of threads", "[s
   weather.rain_mm_h = 20.0;
   auto capture = [&](std::uint64_t seed, int threads) {
     RaycastScene scene(w);
-    scene.AddMovingObject(Box({-0.3f, -0.3f, -0.1f}, {0.3f, 0.3f, 0.1f}, m), [](double t) {
+    scene.AddMovingObject(BoxMesh({-0.3f, -0.3f, -0.1f}, {0.3f, 0.3f, 0.1f}, m), [](double t) {
       Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
       X.translation() = Eigen::Vector3d(8.0, -3.0 + 15.0 * t, 3.0);
       return X;

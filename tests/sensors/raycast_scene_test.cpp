@@ -1,7 +1,9 @@
 #include "sensors/raycast_scene.h"
 
 #include <catch2/catch.hpp>
+
 #include <cmath>
+#include "test_support.h"
 
 #include "sim/core/rng.h"
 
@@ -10,24 +12,9 @@ using uavsim::core::WorldGeometry;
 using uavsim::sensors::Ray;
 using uavsim::sensors::RaycastScene;
 
-namespace {
+using uavsim::testing::BoxMesh;
 
-// An axis-aligned box [lo, hi] as 12 outward-wound triangles.
-TriangleMesh Box(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi, std::uint32_t material) {
-  TriangleMesh m;
-  m.name = "box";
-  m.material = material;
-  for (int i = 0; i < 8; ++i)
-    m.vertices_m.emplace_back(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(),
-                              i & 4 ? hi.z() : lo.z());
-  const std::uint32_t q[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
-                                 {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-  for (const auto& f : q) {
-    m.triangles.push_back({f[0], f[1], f[2]});
-    m.triangles.push_back({f[0], f[2], f[3]});
-  }
-  return m;
-}
+namespace {
 
 WorldGeometry GroundAndWall() {
   WorldGeometry w;
@@ -38,7 +25,7 @@ WorldGeometry GroundAndWall() {
   ground.triangles = {{0, 1, 2}, {0, 2, 3}};
   w.meshes.push_back(ground);
   w.meshes.push_back(
-      Box({20, -10, 0}, {22, 10, 15}, uavsim::core::kMaterialConcrete));  // a wall at x = 20
+      BoxMesh({20, -10, 0}, {22, 10, 15}, uavsim::core::kMaterialConcrete));  // a wall at x = 20
   return w;
 }
 
@@ -108,7 +95,8 @@ TEST_CASE("RaycastScene: a moving object follows its pose function", "[sensors]"
   RaycastScene scene(GroundAndWall());
   // A 1 m cube moving along +y at 2 m/s, centred at z = 5.
   const int id = scene.AddMovingObject(
-      Box({-0.5f, -0.5f, -0.5f}, {0.5f, 0.5f, 0.5f}, uavsim::core::kMaterialDrone), [](double t) {
+      BoxMesh({-0.5f, -0.5f, -0.5f}, {0.5f, 0.5f, 0.5f}, uavsim::core::kMaterialDrone),
+      [](double t) {
         Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
         X.translation() = Eigen::Vector3d(10, 2 * t, 5);
         X.linear() = Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ()).toRotationMatrix();
