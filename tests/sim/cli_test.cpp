@@ -158,12 +158,18 @@ TEST_CASE("CLI: run writes the run directory of DESIGN.md", "[sim]") {
 TEST_CASE("CLI: the same scenario and seed give byte-identical files, another seed differs",
           "[sim]") {
   const std::string dir = TempDir("determinism");
-  // A random trajectory and clock jitter: everything that draws random numbers.
+  // A random trajectory, clock jitter, and all three sensors with their noise,
+  // pre-processing and the EKF: everything that draws random numbers.
   WriteFile(dir + "/s.json", R"({
-    "duration_s": 2,
+    "duration_s": 6,
     "uavs": [{"id": "target", "trajectory": {"type": "random"}}],
-    "nodes": [{"id": "cam", "sensor": {"type": "fisheye_stereo", "clock_jitter_s": 0.001}},
-              {"id": "lid", "sensor": {"type": "lidar", "phase_s": 0.05, "clock_jitter_s": 0.002}}]
+    "nodes": [{"id": "cam", "sensor": {"type": "fisheye_stereo", "clock_jitter_s": 0.001,
+                 "pose": {"position_m": [-30, -30, 1.5], "rpy_deg": [0, -50, 45]}}},
+              {"id": "lid", "sensor": {"type": "lidar", "preset": "livox_rosette", "phase_s": 0.05,
+                 "clock_jitter_s": 0.002, "pose": {"position_m": [30, -30, 1.5], "rpy_deg": [0, -40, 135]}}},
+              {"id": "rad", "sensor": {"type": "fmcw_radar",
+                 "pose": {"position_m": [-24, 24, 1.5], "rpy_deg": [0, -50, -45]}}}],
+    "links": {"default": {"loss": {"type": "bernoulli", "p": 0.1}, "jitter": {"type": "normal", "std_ms": 2}}}
   })");
   auto run = [&](const std::string& name, const std::string& seed) {
     auto r = RunCli({"run", dir + "/s.json", "--out", dir + "/" + name, "--seed", seed, "--quiet"});
@@ -171,7 +177,10 @@ TEST_CASE("CLI: the same scenario and seed give byte-identical files, another se
     return dir + "/" + name;
   };
   const std::string a = run("a", "7"), b = run("b", "7"), c = run("c", "8");
-  CHECK(ReadFile(a + "/truth.csv") == ReadFile(b + "/truth.csv"));
+  for (const char* f : {"truth.csv", "estimates.csv", "rate_snr.csv"}) {
+    INFO(f);
+    CHECK(ReadFile(a + "/" + f) == ReadFile(b + "/" + f));
+  }
   CHECK(WithoutWallClock(Json::parse(ReadFile(a + "/manifest.json"))) ==
         WithoutWallClock(Json::parse(ReadFile(b + "/manifest.json"))));
   CHECK(WithoutWallClock(Json::parse(ReadFile(a + "/metrics.json"))) ==
