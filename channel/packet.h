@@ -16,39 +16,17 @@
 
 #include <cstdint>
 #include <memory>
-#include <optional>
-#include <string_view>
 #include <vector>
 
+#include "sim/core/modality.h"
 #include "sim/core/time.h"
 
 namespace uavsim::channel {
 
-enum class Modality : std::uint8_t { kCamera = 0, kLidar = 1, kRadar = 2 };
-constexpr int kModalityCount = 3;
-
-// "camera", "lidar", "radar": the keys of metrics.json's "modalities".
-constexpr const char* ModalityName(Modality m) {
-  switch (m) {
-    case Modality::kCamera:
-      return "camera";
-    case Modality::kLidar:
-      return "lidar";
-    case Modality::kRadar:
-      return "radar";
-  }
-  return "unknown";
-}
-
-// The inverse of ModalityName (what SensorConfig::modality() returns); nullopt
-// for any other name.
-inline std::optional<Modality> ModalityFromName(std::string_view name) {
-  for (int i = 0; i < kModalityCount; ++i) {
-    const auto m = static_cast<Modality>(i);
-    if (name == ModalityName(m)) return m;
-  }
-  return std::nullopt;
-}
+using core::kModalityCount;
+using core::Modality;
+using core::ModalityFromName;
+using core::ModalityName;
 
 struct Message {
   std::uint32_t node = 0;  // the sender's index in the scenario's node list

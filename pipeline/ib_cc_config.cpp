@@ -8,18 +8,6 @@ namespace uavsim::pipeline {
 
 using core::Rule;
 
-const char* ModalityName(Modality m) {
-  switch (m) {
-    case Modality::kCamera:
-      return "camera";
-    case Modality::kLidar:
-      return "lidar";
-    case Modality::kRadar:
-      return "radar";
-  }
-  return "unknown";
-}
-
 template <class V>
 void Visit(V& v, IbCcConfig& c) {
   v.Enum("modality", c.modality,

@@ -27,7 +27,4 @@ struct IbCcConfig {
 template <class V>
 void Visit(V& v, IbCcConfig& c);
 
-// "camera", "lidar", "radar".
-const char* ModalityName(Modality m);
-
 }  // namespace uavsim::pipeline

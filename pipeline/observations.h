@@ -6,10 +6,13 @@
 #include <cstddef>
 #include <vector>
 
+#include "sim/core/modality.h"
+
 namespace uavsim::pipeline {
 
-enum class Modality { kCamera = 0, kLidar = 1, kRadar = 2 };
-constexpr int kModalityCount = 3;
+using core::kModalityCount;
+using core::Modality;
+using core::ModalityName;
 
 // The camera node's ROI around the moving target in both rectified eyes
 // (paper Sec. IV-A), plus the geometry a crop alone loses.
