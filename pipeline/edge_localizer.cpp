@@ -22,6 +22,16 @@ std::unique_ptr<EdgeLocalizer> EdgeLocalizer::Load(const std::string& path) {
       new EdgeLocalizer(std::make_unique<Impl>(std::move(model))));
 }
 
+std::unique_ptr<EdgeLocalizer> EdgeLocalizer::Create(int latent_dim, double window_s) {
+  UavLocModelConfig config;
+  config.latent_dim = latent_dim;
+  config.window_s = window_s;
+  UavLocModel model(config);
+  model->eval();
+  return std::unique_ptr<EdgeLocalizer>(
+      new EdgeLocalizer(std::make_unique<Impl>(std::move(model))));
+}
+
 std::optional<Eigen::Vector3d> EdgeLocalizer::OnWindow(const WindowInputs& window) {
   const Eigen::Vector3d p = impl_->model->Step(window);
   const TeAlign& align = impl_->model->te_align();

@@ -22,6 +22,10 @@ class EdgeLocalizer {
   // (see uavloc_model.h). Throws core::ConfigError naming the file for a
   // missing, malformed or mismatched model.
   static std::unique_ptr<EdgeLocalizer> Load(const std::string& path);
+  // Fresh untrained weights (from LibTorch's generator) for a latent size z
+  // and window t^w, other sizes at their defaults: for benchmarks and tests.
+  // Throws std::invalid_argument for an invalid size.
+  static std::unique_ptr<EdgeLocalizer> Create(int latent_dim, double window_s);
   ~EdgeLocalizer();
   EdgeLocalizer(const EdgeLocalizer&) = delete;
   EdgeLocalizer& operator=(const EdgeLocalizer&) = delete;

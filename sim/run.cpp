@@ -5,6 +5,7 @@
 #include <cmath>
 #include <csignal>
 #include <ctime>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -18,7 +19,9 @@
 #include "pipeline/camera_preprocessor.h"
 #include "pipeline/ekf.h"
 #include "pipeline/lidar_preprocessor.h"
+#include "pipeline/model_bundle.h"
 #include "pipeline/radar_preprocessor.h"
+#include "pipeline/torch_runtime.h"
 #include "results/csv.h"
 #include "results/plot.h"
 #include "results/run_directory.h"
@@ -65,7 +68,57 @@ struct NodeContent {
   std::string node_id;
   std::optional<pipeline::CameraObservation> camera;
   std::optional<pipeline::PointObservation> points;
+  std::vector<float> latent;  // the IB-CC mu, when uavloc runs and something was found
+  std::size_t sample = 0;     // index in the collected episode, when collecting
 };
+
+// Whether a node's pre-processing found anything to send.
+bool FoundSomething(const NodeContent& c) {
+  return (c.camera && c.camera->detected) || (c.points && c.points->count() > 0);
+}
+
+// The trained model a scenario names, loaded for the run loop. Throws
+// core::ConfigError naming the scenario's /pipeline/model when it is missing
+// or does not fit the scenario.
+std::unique_ptr<pipeline::UavLocModelFiles> LoadModel(const Scenario& s, const std::string& file,
+                                                      bool quiet, core::Json& info) {
+  namespace fs = std::filesystem;
+  const bool is_default = s.pipeline.model == "default";
+  const std::string path =
+      is_default ? pipeline::DefaultModelPath()
+                 : pipeline::ModelManifestPath(
+                       (fs::path(s.base_dir) / s.pipeline.model).lexically_normal().string());
+  const std::string how =
+      "train one with `uavsim train SCENARIO.json --out DIR` and set /pipeline/model to DIR";
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec))
+    throw core::ConfigError(file, "/pipeline/model", "no trained model at " + path + ": " + how);
+  std::unique_ptr<pipeline::UavLocModelFiles> model;
+  try {
+    model = pipeline::UavLocModelFiles::Load(path);
+  } catch (const core::ConfigError& e) {
+    throw core::ConfigError(file, "/pipeline/model", std::string(e.what()) + " (" + how + ")");
+  }
+  const pipeline::ModelManifest& m = model->manifest();
+  if (m.latent_dim != s.pipeline.latent_dim)
+    throw core::ConfigError(file, "/pipeline/latent_dim",
+                            "the model " + path + " sends latents of " +
+                                std::to_string(m.latent_dim) + " values, the scenario asks for " +
+                                std::to_string(s.pipeline.latent_dim) + ": " + how);
+  if (std::abs(m.window_s - s.pipeline.window_s) > 1e-12)
+    throw core::ConfigError(file, "/pipeline/window_s",
+                            "the model " + path + " was trained with " +
+                                core::FormatNumber(m.window_s) +
+                                " s windows, the scenario asks for " +
+                                core::FormatNumber(s.pipeline.window_s) + " s: " + how);
+  const bool same_layout = m.layout_hash == LayoutHash(s);
+  if (!same_layout && !quiet)
+    std::cerr << "uavsim: warning: the model " << path << " was trained for scenario \""
+              << m.scenario << "\" with another world or node layout; its estimates may be poor ("
+              << how << ")\n";
+  info = {{"path", path}, {"trained_for", m.scenario}, {"same_layout", same_layout}};
+  return model;
+}
 
 // Bytes a pre-processed observation takes: the two ROI crops at 8 bits plus
 // their geometry, or the points as float32.
@@ -114,8 +167,14 @@ void InstallInterruptHandlers() {
 RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
   const auto wall_start = std::chrono::steady_clock::now();
   const std::string started_utc = UtcNow();
-  results::RunDirectory dir(o.out_dir, o.force);
-  Recorder recorder(dir, std::set<std::string>(o.record.begin(), o.record.end()));
+  // Collecting training data writes nothing.
+  std::optional<results::RunDirectory> dir;
+  std::optional<Recorder> recorder;
+  if (!o.collect) {
+    dir.emplace(o.out_dir, o.force);
+    recorder.emplace(*dir, std::set<std::string>(o.record.begin(), o.record.end()));
+  }
+  const auto records = [&recorder](const char* m) { return recorder && recorder->Wants(m); };
 
   WorldModel world(s);
   core::Simulator sim;
@@ -125,6 +184,7 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
   results::CsvTable truth({"t_s", "x_m", "y_m", "z_m", "vx_mps", "vy_mps", "vz_mps"});
   core::PeriodicProcess truth_timer(
       s.outputs.truth_rate_hz, 0.0, [&](std::int64_t, core::SimTime t) {
+        if (o.collect) return;
         const auto x = world.target().StateAt(core::ToSeconds(t));
         using results::FormatFixed;
         truth.AddRow({FormatFixed(core::ToSeconds(t), 6), FormatFixed(x.position_m.x(), 6),
@@ -162,6 +222,17 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
     }
   }
 
+  // The learned pipeline: an IB-CC encoder per modality at the nodes, the
+  // edge network at each window deadline on the latents that arrived in time.
+  std::unique_ptr<pipeline::UavLocModelFiles> uavloc;
+  core::Json model_info;
+  if (runs("uavloc") && !o.collect) {
+    pipeline::InitTorch(1, s.seed);
+    uavloc = LoadModel(s, o.scenario_file, o.quiet, model_info);
+  }
+  const core::SimTime window_ns = core::Seconds(s.pipeline.window_s);
+  std::map<std::int64_t, pipeline::WindowInputs> pending;  // window k -> latents arrived
+
   // Uplinks (one per entry of /links, shared by the nodes that name it) and
   // the edge server's reception accounting.
   std::vector<std::string> node_ids;
@@ -171,11 +242,19 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
   for (const auto& [name, config] : s.links) {
     auto link = std::make_unique<channel::Uplink>(
         sim, config, s.weather, core::RngStream(s.seed, "link/" + name), node_ids);
-    link->SetArrivalCallback([&edge, &ekf](const channel::Message& m, core::SimTime t) {
-      if (!edge.OnArrival(m, t) || !ekf || !m.content) return;  // late: treated as missing
+    link->SetArrivalCallback([&](const channel::Message& m, core::SimTime t) {
+      if (!edge.OnArrival(m, t) || !m.content) return;  // late: treated as missing
       const auto& content = *static_cast<const NodeContent*>(m.content.get());
-      if (content.camera) ekf->Observe(content.node_id, *content.camera);
-      if (content.points) ekf->Observe(content.node_id, *content.points);
+      if (o.collect && FoundSomething(content)) o.collect->samples[content.sample].on_time = true;
+      if (ekf && content.camera) ekf->Observe(content.node_id, *content.camera);
+      if (ekf && content.points) ekf->Observe(content.node_id, *content.points);
+      if (uavloc && !content.latent.empty()) {
+        const std::int64_t k = m.t_capture_ns / window_ns + 1;
+        pipeline::WindowInputs& w = pending[k];
+        w.window = k;
+        w.frames[static_cast<int>(m.modality)].push_back(
+            {core::ToSeconds(m.t_capture_ns), content.latent});
+      }
     });
     link->SetLossCallback(
         [&edge](const channel::Message& m, channel::LossCause) { edge.OnLost(m); });
@@ -190,6 +269,11 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
   for (const char* m : kModalities)
     frames[m] = 0, bytes.raw[m] = 0, bytes.preprocessed[m] = 0, bytes.compressed[m] = 0;
   const std::uint32_t message_bytes = channel::LatentMessageBytes(s.pipeline.latent_dim);
+  if (o.collect) {
+    o.collect->window_s = s.pipeline.window_s;
+    o.collect->samples.clear();
+    o.collect->window_truth.clear();
+  }
   auto small_objects = [&world](double t_s) {
     std::vector<sensors::BoundingSphere> spheres;
     for (std::size_t i = 0; i < world.uav_count(); ++i)
@@ -242,15 +326,12 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
             world.scene().SetTime(t_s);
             const sensors::StereoFrame frame = nd.camera->Capture(t_s, s.weather, nd.noise);
             raw = frame.RawBytes();
-            if (recorder.Wants("camera")) recorder.RecordCamera(nd.config->id, frame);
+            if (records("camera")) recorder->RecordCamera(nd.config->id, frame);
             content->camera = nd.camera_pre->Process(frame);
-            // The latent travels, not the crops: the edge's filter needs the geometry only.
-            content->camera->crop_left.clear();
-            content->camera->crop_right.clear();
           } else if (nd.lidar) {
             const sensors::PointCloudFrame frame = nd.lidar->Capture(t_s, s.weather, nd.noise);
             raw = frame.RawBytes();
-            if (recorder.Wants("lidar")) recorder.RecordLidar(nd.config->id, frame);
+            if (records("lidar")) recorder->RecordLidar(nd.config->id, frame);
             content->points = nd.lidar_pre->Process(frame);
           } else if (nd.radar) {
             world.scene().SetTime(t_s);
@@ -259,19 +340,42 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
             const sensors::RadarFrame frame =
                 nd.radar_processor->Process(cube, nd.radar->X_WR(), t_s);
             raw = cube.RawBytes();
-            if (recorder.Wants("radar")) recorder.RecordRadar(nd.config->id, frame);
+            if (records("radar")) recorder->RecordRadar(nd.config->id, frame);
             content->points = nd.radar_pre->Process(frame);
           }
+          // The node sends its latent when it found something, else a bare
+          // header ("nothing seen").
+          const bool found = FoundSomething(*content);
+          if (found && uavloc) {
+            const pipeline::NodeEncoder& enc = uavloc->encoder(nd.modality);
+            content->latent =
+                content->camera ? enc.Encode(*content->camera) : enc.Encode(*content->points);
+          }
+          if (found && o.collect) {
+            pipeline::Sample sample;
+            sample.modality = nd.modality;
+            sample.node = nd.index;
+            sample.t_s = t_s;
+            sample.truth_m = world.target().StateAt(t_s).position_m;
+            sample.camera = content->camera;
+            sample.points = content->points;
+            content->sample = o.collect->samples.size();
+            o.collect->samples.push_back(std::move(sample));
+          }
+          // The latent travels, not the crops: the edge's filter needs the geometry only.
+          if (content->camera)
+            content->camera->crop_left.clear(), content->camera->crop_right.clear();
+          const std::uint32_t bytes_sent = found ? message_bytes : channel::kMessageHeaderBytes;
           ++frames[modality];
           bytes.raw[modality] += raw;
           bytes.preprocessed[modality] += PreprocessedBytes(*content);
-          bytes.compressed[modality] += message_bytes;
+          bytes.compressed[modality] += bytes_sent;
           channel::Message m;
           m.node = nd.index;
           m.modality = nd.modality;
           m.sequence = nd.sequence++;
           m.t_capture_ns = t;
-          m.payload_bytes = message_bytes;
+          m.payload_bytes = bytes_sent;
           m.content = std::move(content);
           edge.OnSent(m);
           link->Send(std::move(m));
@@ -287,9 +391,11 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
   // estimate yet.
   const double rain_db_per_km = channel::RainSpecificAttenuationDbPerKm(
       s.base_station.carrier_ghz, s.weather.rain_mm_h, channel::Polarization::kVertical, 0.0);
+  std::vector<std::string> steered;
+  if (uavloc) steered.push_back("uavloc");
+  if (ekf) steered.push_back("ekf");
   channel::DownlinkScorer downlink(
-      s.base_station, rain_db_per_km,
-      ekf ? std::vector<std::string>{"ekf"} : std::vector<std::string>{},
+      s.base_station, rain_db_per_km, steered,
       channel::SnrGridDb(s.outputs.snr_db.from, s.outputs.snr_db.to, s.outputs.snr_db.step),
       core::RngStream(s.seed, "base_station/downlink"));
   results::CsvTable estimates({"t_s", "method", "x_m", "y_m", "z_m"});
@@ -297,10 +403,24 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
   const core::SimTime allowance = core::Seconds(s.pipeline.late_allowance_s);
   core::PeriodicProcess window_timer(
       1.0 / s.pipeline.window_s, s.pipeline.window_s + s.pipeline.late_allowance_s,
-      [&](std::int64_t, core::SimTime t_deadline) {
+      [&](std::int64_t tick, core::SimTime t_deadline) {
         const double t_s = core::ToSeconds(t_deadline - allowance);  // the window's end
         const Eigen::Vector3d truth_m = world.target().StateAt(t_s).position_m;
+        if (o.collect) {
+          if (t_deadline - allowance <= t_end) o.collect->window_truth.push_back(truth_m);
+          return;
+        }
         std::map<std::string, Eigen::Vector3d> estimated;
+        if (uavloc) {
+          const std::int64_t k = tick + 1;
+          pipeline::WindowInputs inputs;
+          inputs.window = k;
+          if (auto it = pending.find(k); it != pending.end()) {
+            inputs = std::move(it->second);
+            pending.erase(it);
+          }
+          if (const auto p = uavloc->edge().OnWindow(inputs)) estimated["uavloc"] = *p;
+        }
         if (ekf) {
           if (const auto p = ekf->EstimateAt(t_s)) estimated["ekf"] = *p;
         }
@@ -334,10 +454,15 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
   summary.frames = frames;
   summary.wall_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  if (uavloc) rmse["uavloc"];
+  if (ekf) rmse["ekf"];
+  for (const auto& [method, acc] : rmse)
+    summary.rmse_m[method] = acc.count ? std::optional<double>(acc.value()) : std::nullopt;
+  if (o.collect) return summary;
 
-  dir.WriteText("truth.csv", truth.str());
-  dir.WriteText("estimates.csv", estimates.str());
-  dir.WriteText("rate_snr.csv", downlink.rates().Csv());
+  dir->WriteText("truth.csv", truth.str());
+  dir->WriteText("estimates.csv", estimates.str());
+  dir->WriteText("rate_snr.csv", downlink.rates().Csv());
   results::PlotSpec plot;
   plot.title = "Achievable rate vs SNR (" + s.name + ")";
   plot.x_label = "SNR (dB)";
@@ -345,28 +470,24 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
   plot.x_column = "snr_db";
   plot.y_column = "rate_bps_hz";
   plot.group_column = "beam";
-  plot.png_path = dir.StagingPath("rate_snr.png");
-  if (const std::string err = results::PlotCsv(dir.StagingPath("rate_snr.csv"), plot);
+  plot.png_path = dir->StagingPath("rate_snr.png");
+  if (const std::string err = results::PlotCsv(dir->StagingPath("rate_snr.csv"), plot);
       !err.empty() && !o.quiet)
     std::cerr << "uavsim: warning: rate_snr.png not drawn: " << err << "\n";
-  recorder.Finish();
+  recorder->Finish();
 
   core::Json metrics = core::Json::object();
   // Every method that ran has an entry; null when it never produced an
   // estimate (e.g. a run shorter than the filter's warm-up).
   core::Json rmse_json = core::Json::object();
   core::Json windows_json = core::Json::object();
-  if (ekf) rmse["ekf"];
   for (const auto& [method, acc] : rmse) {
     rmse_json[method] = acc.count ? core::Json(acc.value()) : core::Json(nullptr);
     windows_json[method] = acc.count;
   }
   metrics["rmse_m"] = rmse_json;
   metrics["estimated_windows"] = windows_json;
-  if (runs("uavloc"))
-    metrics["unavailable_methods"] = {{"uavloc",
-                                       "no trained model yet: the learned pipeline is being built "
-                                       "(uavsim train is not available yet)"}};
+  if (uavloc) metrics["uavloc_model"] = model_info;
   core::Json modalities = core::Json::object();
   for (const auto& [m, n] : frames) modalities[m] = {{"frames", n}};
   edge.WriteMetrics(modalities);
@@ -380,7 +501,7 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
   metrics["sim_s"] = summary.sim_s;
   metrics["wall_s"] = summary.wall_s;
   metrics["realtime_factor"] = summary.wall_s > 0 ? summary.sim_s / summary.wall_s : 0.0;
-  dir.WriteJson("metrics.json", metrics);
+  dir->WriteJson("metrics.json", metrics);
 
   core::Json manifest = core::Json::object();
   manifest["uavsim_version"] = Version();
@@ -390,9 +511,9 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
   manifest["started_utc"] = started_utc;
   manifest["wall_s"] = summary.wall_s;
   manifest["scenario"] = ResolvedJson(s);
-  dir.WriteJson("manifest.json", manifest);
+  dir->WriteJson("manifest.json", manifest);
 
-  dir.Commit();
+  dir->Commit();
   return summary;
 }
 

@@ -5,10 +5,12 @@
 
 #include <iosfwd>
 #include <map>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "pipeline/dataset.h"
 #include "sim/core/json_io.h"
 #include "sim/scenario.h"
 
@@ -20,6 +22,11 @@ struct RunOptions {
   bool quiet = false;               // no progress, no summary
   std::vector<std::string> record;  // modalities to record: camera, lidar, radar
   std::string scenario_file;        // for the manifest
+  // Training-data generation (sim/train.h): when set, every node frame whose
+  // pre-processing found something is added to *collect with the truth at
+  // its capture time and whether it reached the edge in time, and the truth
+  // at every window's end; and nothing is written (out_dir is ignored).
+  pipeline::Episode* collect = nullptr;
 };
 
 struct RunSummary {
@@ -27,6 +34,9 @@ struct RunSummary {
   double wall_s = 0.0;
   std::size_t truth_rows = 0;
   std::map<std::string, std::uint64_t> frames;  // per modality
+  // Per method that ran: RMSE over the windows it estimated, or nothing if
+  // it never produced an estimate.
+  std::map<std::string, std::optional<double>> rmse_m;
 };
 
 // Throws core::UsageError (exists, not forced), std::runtime_error (I/O) or

@@ -300,4 +300,14 @@ Scenario LoadScenario(const std::string& path, const std::vector<std::string>& o
 
 Json ResolvedJson(const Scenario& s) { return core::ToJson(s); }
 
+std::string LayoutHash(const Scenario& s) {
+  const core::Json j = ResolvedJson(s);
+  const std::string text = j.at("world").dump() + j.at("nodes").dump();
+  std::uint64_t h = 1469598103934665603ull;  // FNV-1a 64
+  for (unsigned char ch : text) h = (h ^ ch) * 1099511628211ull;
+  char buf[17];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+  return buf;
+}
+
 }  // namespace uavsim::sim

@@ -1,0 +1,130 @@
+#include "pipeline/model_bundle.h"
+
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+#include <system_error>
+
+#include "sim/core/error.h"
+#include "sim/core/json_io.h"
+
+#ifndef UAVSIM_MODELS_DIR
+#error "UAVSIM_MODELS_DIR must name the source tree's models/ folder"
+#endif
+
+namespace uavsim::pipeline {
+namespace {
+
+namespace fs = std::filesystem;
+
+bool IsPlainFileName(const std::string& name) {
+  return !name.empty() && fs::path(name).filename() == fs::path(name);
+}
+
+}  // namespace
+
+template <class V>
+void Visit(V& v, ModelManifest& c) {
+  v("format", c.format);
+  v.Check(c.format == ModelManifest::kFormat, "format",
+          std::string("expected \"") + ModelManifest::kFormat + "\", got \"" + c.format + "\"");
+  v("note", c.note);
+  v("scenario", c.scenario);
+  v("layout_hash", c.layout_hash);
+  v("latent_dim", c.latent_dim, core::Rule::Range(2, 4096));
+  v("window_s", c.window_s, core::Rule::Range(1e-9, 3600.0));
+  for (auto [key, name] : {std::pair{"camera", &c.camera}, std::pair{"lidar", &c.lidar},
+                           std::pair{"radar", &c.radar}, std::pair{"edge", &c.edge}}) {
+    v(key, *name);
+    v.Check(IsPlainFileName(*name), key,
+            "expected a file name in the model's folder, got \"" + *name + "\"");
+  }
+}
+UAVSIM_INSTANTIATE_VISIT(ModelManifest);
+
+std::string ModelManifestPath(const std::string& path) {
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) return (fs::path(path) / "model.json").string();
+  return path;
+}
+
+std::string DefaultModelPath() { return std::string(UAVSIM_MODELS_DIR) + "/default/model.json"; }
+
+ModelManifest ReadModelManifest(const std::string& manifest_path) {
+  ModelManifest m;
+  core::FromJson(core::LoadJsonFile(manifest_path), manifest_path, "", m);
+  return m;
+}
+
+void WriteModelManifest(const ModelManifest& m, const std::string& manifest_path) {
+  const std::string tmp = manifest_path + ".tmp-" + std::to_string(::getpid());
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    out << core::ToJson(m).dump(2) << '\n';
+    out.close();
+    if (!out) {
+      std::error_code ec;
+      fs::remove(tmp, ec);
+      throw std::runtime_error(manifest_path + ": cannot write");
+    }
+  }
+  std::error_code ec;
+  fs::rename(tmp, manifest_path, ec);
+  if (ec) {
+    fs::remove(tmp, ec);
+    throw std::runtime_error(manifest_path + ": cannot write: " + ec.message());
+  }
+}
+
+std::unique_ptr<UavLocModelFiles> UavLocModelFiles::Load(const std::string& path) {
+  auto files = std::make_unique<UavLocModelFiles>();
+  files->manifest_path_ = ModelManifestPath(path);
+  files->manifest_ = ReadModelManifest(files->manifest_path_);
+  const ModelManifest& m = files->manifest_;
+  const fs::path folder = fs::path(files->manifest_path_).parent_path();
+  const auto require = [&](const std::string& name, const char* key) {
+    const fs::path p = folder / name;
+    std::error_code ec;
+    if (!fs::is_regular_file(p, ec))
+      throw core::ConfigError(files->manifest_path_, std::string("/") + key,
+                              "file not found: " + p.string());
+    return p.string();
+  };
+  const std::pair<Modality, const char*> parts[] = {
+      {Modality::kCamera, "camera"}, {Modality::kLidar, "lidar"}, {Modality::kRadar, "radar"}};
+  for (const auto& [modality, key] : parts) {
+    const std::string& name = modality == Modality::kCamera  ? m.camera
+                              : modality == Modality::kLidar ? m.lidar
+                                                             : m.radar;
+    const std::string sidecar = require(name, key);
+    std::unique_ptr<NodeEncoder> enc;
+    try {
+      enc = NodeEncoder::Load(sidecar);
+    } catch (const std::runtime_error& e) {
+      if (dynamic_cast<const core::ConfigError*>(&e)) throw;
+      throw core::ConfigError(sidecar, "", e.what());
+    }
+    if (enc->modality() != modality)
+      throw core::ConfigError(
+          sidecar, "/config/modality",
+          std::string("expected the ") + key + " model, got " + ModalityName(enc->modality()));
+    if (enc->latent_dim() != m.latent_dim)
+      throw core::ConfigError(sidecar, "/config/latent_dim",
+                              "expected " + std::to_string(m.latent_dim) + " as in " +
+                                  files->manifest_path_ + ", got " +
+                                  std::to_string(enc->latent_dim()));
+    files->encoders_[static_cast<int>(modality)] = std::move(enc);
+  }
+  const std::string edge = require(m.edge, "edge");
+  files->edge_ = EdgeLocalizer::Load(edge);
+  if (files->edge_->latent_dim() != m.latent_dim)
+    throw core::ConfigError(edge + ".json", "/latent_dim",
+                            "expected " + std::to_string(m.latent_dim) + " as in " +
+                                files->manifest_path_ + ", got " +
+                                std::to_string(files->edge_->latent_dim()));
+  return files;
+}
+
+}  // namespace uavsim::pipeline

@@ -1,0 +1,72 @@
+// A trained UAVLoc model on disk, as `uavsim train` writes it and the run loop
+// loads it: one folder holding
+//
+//   model.json            this manifest (format, provenance, sizes, file names)
+//   camera.json/.pt       the camera node's IB-CC model (ib_model_io.h)
+//   lidar.json/.pt        the LiDAR node's
+//   radar.json/.pt        the radar node's
+//   uavloc.pt/.pt.json    the edge network: TE-Align, MADW, MICA, Mamba (uavloc_model.h)
+//   training_report.json  losses per stage and held-out RMSE (written by the trainer)
+//
+// A model is addressed by its manifest or its folder. Torch-free header.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "pipeline/edge_localizer.h"
+#include "pipeline/node_encoder.h"
+
+namespace uavsim::pipeline {
+
+struct ModelManifest {
+  static constexpr const char* kFormat = "uavsim-model/1";
+  std::string format = kFormat;
+  std::string note;                    // how it was made: the train command, seed and data
+  std::string scenario;                // name of the scenario it was trained for
+  std::string layout_hash;             // fingerprint of that scenario's world and nodes
+  int latent_dim = 16;                 // z of every node's latent
+  double window_s = 0.2;               // t^w
+  std::string camera = "camera.json";  // per-modality IB-CC sidecars, relative to the folder
+  std::string lidar = "lidar.json";
+  std::string radar = "radar.json";
+  std::string edge = "uavloc.pt";  // the edge network's weights (sidecar: + ".json")
+};
+
+template <class V>
+void Visit(V& v, ModelManifest& c);
+
+// The manifest a model path names: `path` itself if it is a file, or
+// `path`/model.json for a folder.
+std::string ModelManifestPath(const std::string& path);
+// The model shipped for scenarios/default.json (in the source tree).
+std::string DefaultModelPath();
+
+// Throws core::ConfigError naming the file and JSON pointer.
+ModelManifest ReadModelManifest(const std::string& manifest_path);
+// Writes atomically; throws std::runtime_error naming the path on failure.
+void WriteModelManifest(const ModelManifest& m, const std::string& manifest_path);
+
+// A loaded model: one encoder per modality (shared by that modality's nodes:
+// the run loop is single-threaded) and the edge localizer. Call InitTorch()
+// first.
+class UavLocModelFiles {
+ public:
+  // Throws core::ConfigError naming the file for anything missing or
+  // malformed, or for a part whose latent size or modality does not match
+  // the manifest.
+  static std::unique_ptr<UavLocModelFiles> Load(const std::string& path);
+
+  const ModelManifest& manifest() const { return manifest_; }
+  const std::string& manifest_path() const { return manifest_path_; }
+  const NodeEncoder& encoder(Modality m) const { return *encoders_[static_cast<int>(m)]; }
+  EdgeLocalizer& edge() { return *edge_; }
+
+ private:
+  ModelManifest manifest_;
+  std::string manifest_path_;
+  std::unique_ptr<NodeEncoder> encoders_[kModalityCount];
+  std::unique_ptr<EdgeLocalizer> edge_;
+};
+
+}  // namespace uavsim::pipeline

@@ -1,0 +1,488 @@
+#include "pipeline/trainer.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <stdexcept>
+
+#include "pipeline/ib_encoder.h"
+#include "pipeline/ib_model_io.h"
+#include "pipeline/ib_normalization.h"
+#include "pipeline/te_align.h"
+#include "pipeline/uavloc_model.h"
+#include "sim/core/json_io.h"
+#include "sim/core/progress.h"
+
+namespace uavsim::pipeline {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+const char* const kPartNames[kModalityCount] = {"camera", "lidar", "radar"};
+
+double SecondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+// The best weights seen so far, kept in memory (parameters and buffers, in
+// the module's deterministic order).
+class BestWeights {
+ public:
+  void Take(const torch::nn::Module& m) {
+    torch::NoGradGuard no_grad;
+    saved_.clear();
+    for (const auto& p : m.parameters()) saved_.push_back(p.detach().clone());
+    for (const auto& b : m.buffers()) saved_.push_back(b.detach().clone());
+  }
+  void Restore(torch::nn::Module& m) const {
+    torch::NoGradGuard no_grad;
+    std::size_t i = 0;
+    for (auto& p : m.parameters()) p.copy_(saved_.at(i++));
+    for (auto& b : m.buffers()) b.copy_(saved_.at(i++));
+  }
+
+ private:
+  std::vector<torch::Tensor> saved_;
+};
+
+// Early stopping on a validation loss: remembers the best epoch and says when
+// `patience` epochs have passed without improvement.
+struct EarlyStopping {
+  int patience;
+  double best = std::numeric_limits<double>::infinity();
+  int best_epoch = 0, since_best = 0;
+  // True if `loss` is the new best.
+  bool Add(int epoch, double loss) {
+    if (loss < best) {
+      best = loss, best_epoch = epoch, since_best = 0;
+      return true;
+    }
+    ++since_best;
+    return false;
+  }
+  bool Stop() const { return since_best >= patience; }
+};
+
+// ---- Stage 1: one modality's IB-CC model on its observations ----
+
+std::vector<const Sample*> SamplesOf(const std::vector<Episode>& episodes, Modality m) {
+  std::vector<const Sample*> out;
+  for (const Episode& e : episodes)
+    for (const Sample& s : e.samples)
+      if (s.modality == m) out.push_back(&s);
+  return out;
+}
+
+IbInput MakeInput(const std::vector<const Sample*>& batch, Modality m, const IbNormalization& n) {
+  if (m == Modality::kCamera) {
+    std::vector<const CameraObservation*> obs;
+    for (const Sample* s : batch) obs.push_back(&*s->camera);
+    return MakeCameraInput(obs, n);
+  }
+  std::vector<const PointObservation*> obs;
+  for (const Sample* s : batch) obs.push_back(&*s->points);
+  return MakePointInput(obs, m, n);
+}
+
+torch::Tensor MakeTarget(const std::vector<const Sample*>& batch, const IbNormalization& n) {
+  std::vector<Eigen::Vector3d> truth;
+  for (const Sample* s : batch) truth.push_back(s->truth_m);
+  return MakePositionTarget(truth, n);
+}
+
+// Mean validation loss (eval mode: t = mu, no dropout), weighted by batch size.
+double IbValidationLoss(IbCcModel& model, const std::vector<const Sample*>& samples, int batch) {
+  if (samples.empty()) return 0.0;
+  torch::NoGradGuard no_grad;
+  model->eval();
+  const IbNormalization& n = model->config().normalization;
+  double sum = 0.0;
+  for (std::size_t i = 0; i < samples.size(); i += static_cast<std::size_t>(batch)) {
+    const std::vector<const Sample*> b(
+        samples.begin() + static_cast<std::ptrdiff_t>(i),
+        samples.begin() + static_cast<std::ptrdiff_t>(
+                              std::min(samples.size(), i + static_cast<std::size_t>(batch))));
+    const IbOutput out = model->forward(MakeInput(b, model->config().modality, n));
+    sum += model->Loss(out, MakeTarget(b, n)).total.item<double>() * static_cast<double>(b.size());
+  }
+  return sum / static_cast<double>(samples.size());
+}
+
+IbCcModel TrainEncoder(Modality m, const Dataset& data, const TrainOptions& o,
+                       const IbNormalization& norm, const std::string& checkpoint,
+                       StageReport& report) {
+  const auto start = Clock::now();
+  IbCcConfig config;
+  config.modality = m;
+  config.latent_dim = o.latent_dim;
+  config.dropout = o.dropout;
+  config.beta = o.beta;
+  config.normalization = norm;
+  IbCcModel model(config);
+  const std::vector<const Sample*> train = SamplesOf(data.train, m);
+  const std::vector<const Sample*> val = SamplesOf(data.validation, m);
+  report.name = kPartNames[static_cast<int>(m)];
+  report.train_items = train.size();
+  report.validation_items = val.size();
+  report.initial_validation_loss = IbValidationLoss(model, val, o.stage1_batch);
+  report.best_validation_loss = report.initial_validation_loss;
+  // A modality the training episodes never observed keeps its initial weights.
+  if (train.size() < 2 || val.empty()) {
+    model->eval();
+    report.seconds = SecondsSince(start);
+    return model;
+  }
+
+  torch::optim::Adam adam(model->parameters(), torch::optim::AdamOptions(o.stage1_lr));
+  BestWeights best;
+  best.Take(*model);
+  EarlyStopping stopping{o.stage1_patience};
+  stopping.Add(0, report.initial_validation_loss);
+  core::Progress progress(std::string("train stage 1: ") + report.name, o.stage1_max_epochs,
+                          "epochs", o.quiet);
+  const std::int64_t per_epoch = std::min<std::int64_t>(static_cast<std::int64_t>(train.size()),
+                                                        o.stage1_max_samples_per_epoch);
+  int epoch = 1;
+  for (; epoch <= o.stage1_max_epochs; ++epoch) {
+    model->train();
+    const torch::Tensor order = torch::randperm(static_cast<std::int64_t>(train.size()),
+                                                torch::TensorOptions().dtype(torch::kLong));
+    const auto* idx = order.data_ptr<std::int64_t>();
+    for (std::int64_t i = 0; i + 1 < per_epoch; i += o.stage1_batch) {
+      std::vector<const Sample*> batch;
+      for (std::int64_t j = i; j < std::min<std::int64_t>(per_epoch, i + o.stage1_batch); ++j)
+        batch.push_back(train[static_cast<std::size_t>(idx[j])]);
+      if (batch.size() < 2) break;  // BatchNorm needs two
+      adam.zero_grad();
+      const IbOutput out = model->forward(MakeInput(batch, m, norm));
+      model->Loss(out, MakeTarget(batch, norm)).total.backward();
+      adam.step();
+    }
+    const double loss = IbValidationLoss(model, val, o.stage1_batch);
+    if (stopping.Add(epoch, loss)) {
+      best.Take(*model);
+      SaveIbCcModel(model, checkpoint, "checkpoint: epoch " + std::to_string(epoch));
+    }
+    progress.Update(epoch);
+    if (stopping.Stop()) break;
+  }
+  progress.Finish();
+  best.Restore(*model);
+  model->eval();
+  report.epochs = std::min(epoch, o.stage1_max_epochs);
+  report.best_epoch = stopping.best_epoch;
+  report.best_validation_loss = stopping.best;
+  report.seconds = SecondsSince(start);
+  return model;
+}
+
+// ---- Stage 2: the edge network on sequences of aligned windows ----
+
+// One episode as the edge saw it: per window the aligned latents and masks,
+// and the truth (normalised).
+struct WindowSequence {
+  torch::Tensor latents;  // [K, M, z]
+  torch::Tensor mask;     // [K, M]
+  torch::Tensor truth;    // [K, 3]
+};
+
+// mu of every sample, in the episodes' order.
+std::vector<std::vector<std::vector<float>>> EncodeEpisodes(const std::vector<Episode>& episodes,
+                                                            std::vector<IbCcModel>& encoders) {
+  torch::NoGradGuard no_grad;
+  std::vector<std::vector<std::vector<float>>> latents(episodes.size());
+  for (std::size_t e = 0; e < episodes.size(); ++e) {
+    const std::vector<Sample>& samples = episodes[e].samples;
+    latents[e].resize(samples.size());
+    for (int m = 0; m < kModalityCount; ++m) {
+      IbCcModel& model = encoders[static_cast<std::size_t>(m)];
+      model->eval();
+      std::vector<std::size_t> index;
+      for (std::size_t i = 0; i < samples.size(); ++i)
+        if (static_cast<int>(samples[i].modality) == m) index.push_back(i);
+      for (std::size_t i = 0; i < index.size(); i += 64) {
+        std::vector<const Sample*> batch;
+        for (std::size_t j = i; j < std::min(index.size(), i + 64); ++j)
+          batch.push_back(&samples[index[j]]);
+        const torch::Tensor mu =
+            model->Encode(MakeInput(batch, static_cast<Modality>(m), model->config().normalization))
+                .contiguous();
+        const float* p = mu.data_ptr<float>();
+        const auto z = static_cast<std::size_t>(mu.size(1));
+        for (std::size_t j = 0; j < batch.size(); ++j)
+          latents[e][index[i + j]].assign(p + j * z, p + (j + 1) * z);
+      }
+    }
+  }
+  return latents;
+}
+
+// TE-Align of each window of an episode from the on-time samples' latents.
+WindowSequence AlignEpisode(const Episode& ep, const std::vector<std::vector<float>>& latents,
+                            const TeAlign& align, const IbNormalization& norm) {
+  const auto k_count = static_cast<std::int64_t>(ep.window_truth.size());
+  std::vector<WindowInputs> inputs(static_cast<std::size_t>(k_count));
+  for (std::int64_t k = 0; k < k_count; ++k) inputs[static_cast<std::size_t>(k)].window = k + 1;
+  for (std::size_t i = 0; i < ep.samples.size(); ++i) {
+    const Sample& s = ep.samples[i];
+    if (!s.on_time) continue;
+    const std::int64_t k = align.WindowOf(s.t_s);
+    if (k < 1 || k > k_count) continue;
+    inputs[static_cast<std::size_t>(k - 1)].frames[static_cast<int>(s.modality)].push_back(
+        {s.t_s, latents[i]});
+  }
+  std::vector<std::vector<AlignedWindow>> one(1);
+  for (const WindowInputs& w : inputs) one[0].push_back(align.Align(w));
+  const FusionBatch b = StackWindows(one);
+  WindowSequence seq;
+  seq.latents = b.latents[0];
+  seq.mask = b.mask[0];
+  std::vector<Eigen::Vector3d> truth(ep.window_truth.begin(), ep.window_truth.end());
+  seq.truth = MakePositionTarget(truth, norm);
+  return seq;
+}
+
+// 1 from the first window in which any modality is available, else 0: the
+// windows a run reports an estimate for. mask [B, K, M] -> [B, K].
+torch::Tensor EstimatedWindows(const torch::Tensor& mask) {
+  return (std::get<0>(mask.amax(2).cummax(1)) > 0.5).to(torch::kFloat32);
+}
+
+// Mean squared error (summed over x, y, z) over the estimated windows.
+torch::Tensor MaskedMse(const torch::Tensor& y_hat, const torch::Tensor& y,
+                        const torch::Tensor& mask) {
+  const torch::Tensor w = EstimatedWindows(mask);
+  return ((y_hat - y).square().sum(2) * w).sum() / w.sum().clamp_min(1.0);
+}
+
+double FusionValidationLoss(UavLocModel& model, const std::vector<WindowSequence>& val) {
+  torch::NoGradGuard no_grad;
+  model->eval();
+  double sum = 0.0, count = 0.0;
+  for (const WindowSequence& s : val) {
+    const torch::Tensor lat = s.latents.unsqueeze(0), mask = s.mask.unsqueeze(0);
+    const torch::Tensor y_hat = model->forward(lat, mask);
+    const torch::Tensor w = EstimatedWindows(mask);
+    sum += ((y_hat - s.truth.unsqueeze(0)).square().sum(2) * w).sum().item<double>();
+    count += w.sum().item<double>();
+  }
+  return count > 0 ? sum / count : 0.0;
+}
+
+// A training batch: random crops of K windows from random episodes, with
+// random modality dropout (a modality missing for the whole crop, or in
+// single windows), never more than the data already lacks.
+FusionBatch DrawCrops(const std::vector<WindowSequence>& train, int batch, std::int64_t k,
+                      const TrainOptions& o, torch::Tensor& truth) {
+  std::vector<torch::Tensor> lat, mask, y;
+  const torch::Tensor pick =
+      torch::randint(static_cast<std::int64_t>(train.size()), {batch}, torch::kLong);
+  for (int b = 0; b < batch; ++b) {
+    const WindowSequence& s = train[static_cast<std::size_t>(pick[b].item<std::int64_t>())];
+    const std::int64_t windows = s.latents.size(0);
+    // Half the crops start at the first window, as a run does.
+    std::int64_t start = 0;
+    if (windows > k && torch::rand({1}).item<double>() >= 0.5)
+      start = torch::randint(windows - k + 1, {1}, torch::kLong).item<std::int64_t>();
+    torch::Tensor m = s.mask.narrow(0, start, k).clone();
+    torch::Tensor keep = (torch::rand({1, kModalityCount}) >= o.modality_dropout).to(m.dtype());
+    if (keep.sum().item<double>() < 0.5) keep.fill_(1.0);  // never drop all three
+    m = m * keep * (torch::rand({k, kModalityCount}) >= o.window_dropout).to(m.dtype());
+    lat.push_back(s.latents.narrow(0, start, k) * m.unsqueeze(2));
+    mask.push_back(m);
+    y.push_back(s.truth.narrow(0, start, k));
+  }
+  truth = torch::stack(y);
+  return {torch::stack(lat), torch::stack(mask)};
+}
+
+UavLocModel TrainFusion(const std::vector<WindowSequence>& train,
+                        const std::vector<WindowSequence>& val, const UavLocModelConfig& config,
+                        const TrainOptions& o, const std::string& checkpoint, StageReport& report) {
+  const auto start = Clock::now();
+  UavLocModel model(config);
+  report.name = "fusion";
+  report.train_items = train.size();
+  report.validation_items = val.size();
+  report.initial_validation_loss = FusionValidationLoss(model, val);
+  std::int64_t k = o.stage2_sequence_windows;
+  for (const WindowSequence& s : train) k = std::min<std::int64_t>(k, s.latents.size(0));
+
+  torch::optim::Adam adam(model->parameters(), torch::optim::AdamOptions(o.stage2_lr));
+  BestWeights best;
+  best.Take(*model);
+  EarlyStopping stopping{o.stage2_patience};
+  stopping.Add(0, report.initial_validation_loss);
+  core::Progress progress("train stage 2: fusion + Mamba", o.stage2_max_epochs, "epochs", o.quiet);
+  // An epoch sees about every training window twice.
+  std::int64_t windows = 0;
+  for (const WindowSequence& s : train) windows += s.latents.size(0);
+  const std::int64_t steps =
+      std::max<std::int64_t>(1, 2 * windows / (k * static_cast<std::int64_t>(o.stage2_batch)));
+  int epoch = 1;
+  for (; epoch <= o.stage2_max_epochs; ++epoch) {
+    model->train();
+    for (std::int64_t step = 0; step < steps; ++step) {
+      torch::Tensor truth;
+      const FusionBatch b = DrawCrops(train, o.stage2_batch, k, o, truth);
+      adam.zero_grad();
+      MaskedMse(model->forward(b.latents, b.mask), truth, b.mask).backward();
+      adam.step();
+    }
+    const double loss = FusionValidationLoss(model, val);
+    if (stopping.Add(epoch, loss)) {
+      best.Take(*model);
+      SaveUavLocModel(model, checkpoint);
+    }
+    progress.Update(epoch);
+    if (stopping.Stop()) break;
+  }
+  progress.Finish();
+  best.Restore(*model);
+  model->eval();
+  report.epochs = std::min(epoch, o.stage2_max_epochs);
+  report.best_epoch = stopping.best_epoch;
+  report.best_validation_loss = stopping.best;
+  report.seconds = SecondsSince(start);
+  return model;
+}
+
+Evaluation Evaluate(UavLocModel& model, const std::vector<WindowSequence>& sequences) {
+  torch::NoGradGuard no_grad;
+  model->eval();
+  Evaluation ev;
+  const double scale = model->config().position_scale_m;
+  for (int subset = -1; subset < kModalityCount; ++subset) {
+    const std::string key = subset < 0 ? "all" : kPartNames[subset];
+    double sum = 0.0, count = 0.0;
+    for (const WindowSequence& s : sequences) {
+      torch::Tensor keep = torch::ones({1, kModalityCount});
+      if (subset >= 0) keep.zero_(), keep[0][subset] = 1.0;
+      const torch::Tensor mask = (s.mask * keep).unsqueeze(0);
+      const torch::Tensor y_hat = model->forward(s.latents.unsqueeze(0) * mask.unsqueeze(3), mask);
+      const torch::Tensor w = EstimatedWindows(mask);
+      sum += ((y_hat - s.truth.unsqueeze(0)).square().sum(2) * w).sum().item<double>();
+      count += w.sum().item<double>();
+    }
+    ev.windows[key] = static_cast<std::size_t>(count);
+    ev.rmse_m[key] =
+        count > 0 ? scale * std::sqrt(sum / count) : std::numeric_limits<double>::quiet_NaN();
+  }
+  return ev;
+}
+
+std::vector<WindowSequence> AlignAll(const std::vector<Episode>& episodes,
+                                     std::vector<IbCcModel>& encoders, const TeAlign& align,
+                                     const IbNormalization& norm) {
+  const auto latents = EncodeEpisodes(episodes, encoders);
+  std::vector<WindowSequence> out;
+  for (std::size_t e = 0; e < episodes.size(); ++e)
+    if (!episodes[e].window_truth.empty())
+      out.push_back(AlignEpisode(episodes[e], latents[e], align, norm));
+  return out;
+}
+
+core::Json EvaluationJson(const Evaluation& ev) {
+  core::Json j = core::Json::object();
+  for (const auto& [key, rmse] : ev.rmse_m)
+    j[key] = {{"rmse_m", std::isfinite(rmse) ? core::Json(rmse) : core::Json(nullptr)},
+              {"windows", ev.windows.at(key)}};
+  return j;
+}
+
+}  // namespace
+
+TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& o, const ModelManifest& manifest,
+                        const std::string& out_dir) {
+  if (data.train.empty() || data.validation.empty())
+    throw std::invalid_argument("train: need at least one training and one validation episode");
+  std::vector<Eigen::Vector3d> positions;
+  for (const Episode& e : data.train)
+    positions.insert(positions.end(), e.window_truth.begin(), e.window_truth.end());
+  const IbNormalization norm = FitPositionNormalization(positions);
+
+  const fs::path out(out_dir);
+  const fs::path checkpoints = out / "checkpoints";
+  fs::create_directories(checkpoints);
+  TrainReport report;
+  std::vector<IbCcModel> encoders;
+  for (int m = 0; m < kModalityCount; ++m) {
+    StageReport stage;
+    encoders.push_back(TrainEncoder(static_cast<Modality>(m), data, o, norm,
+                                    (checkpoints / (std::string(kPartNames[m]) + ".json")).string(),
+                                    stage));
+    report.stages.push_back(stage);
+  }
+
+  UavLocModelConfig config;
+  config.latent_dim = o.latent_dim;
+  config.window_s = o.window_s;
+  config.d_model = o.d_model;
+  config.layers = o.layers;
+  config.position_centre_m = norm.centre_m;
+  config.position_scale_m = norm.scale_m;
+  const TeAlign align(config.te_align());
+  const std::vector<WindowSequence> train = AlignAll(data.train, encoders, align, norm);
+  const std::vector<WindowSequence> val = AlignAll(data.validation, encoders, align, norm);
+  StageReport fusion_stage;
+  UavLocModel model =
+      TrainFusion(train, val, config, o, (checkpoints / manifest.edge).string(), fusion_stage);
+  report.stages.push_back(fusion_stage);
+  if (!data.test.empty()) report.test = Evaluate(model, AlignAll(data.test, encoders, align, norm));
+
+  ModelManifest m = manifest;
+  m.latent_dim = o.latent_dim;
+  m.window_s = o.window_s;
+  const std::string* names[kModalityCount] = {&m.camera, &m.lidar, &m.radar};
+  for (int i = 0; i < kModalityCount; ++i)
+    SaveIbCcModel(encoders[static_cast<std::size_t>(i)], (out / *names[i]).string(), m.note);
+  SaveUavLocModel(model, (out / m.edge).string());
+  fs::remove_all(checkpoints);
+  {
+    const std::string text = ReportJson(report, o);
+    const fs::path p = out / "training_report.json";
+    std::ofstream f(p, std::ios::binary | std::ios::trunc);
+    f << text;
+    if (!f) throw std::runtime_error(p.string() + ": cannot write");
+  }
+  WriteModelManifest(m, (out / "model.json").string());
+  return report;
+}
+
+Evaluation EvaluateModel(const std::string& model_path, const std::vector<Episode>& episodes) {
+  const std::string manifest_path = ModelManifestPath(model_path);
+  const ModelManifest m = ReadModelManifest(manifest_path);
+  const fs::path folder = fs::path(manifest_path).parent_path();
+  std::vector<IbCcModel> encoders;
+  for (const std::string* name : {&m.camera, &m.lidar, &m.radar})
+    encoders.push_back(LoadIbCcModel((folder / *name).string()));
+  UavLocModel model = LoadUavLocModel((folder / m.edge).string());
+  const IbNormalization& norm = encoders.front()->config().normalization;
+  return Evaluate(model, AlignAll(episodes, encoders, model->te_align(), norm));
+}
+
+std::string ReportJson(const TrainReport& r, const TrainOptions& o) {
+  core::Json j = core::Json::object();
+  j["seed"] = o.seed;
+  j["latent_dim"] = o.latent_dim;
+  j["learning_rate"] = {{"stage1", o.stage1_lr}, {"stage2", o.stage2_lr}};
+  core::Json stages = core::Json::array();
+  for (const StageReport& s : r.stages)
+    stages.push_back({{"name", s.name},
+                      {"train_items", s.train_items},
+                      {"validation_items", s.validation_items},
+                      {"epochs", s.epochs},
+                      {"best_epoch", s.best_epoch},
+                      {"initial_validation_loss", s.initial_validation_loss},
+                      {"best_validation_loss", s.best_validation_loss},
+                      {"seconds", s.seconds}});
+  j["stages"] = stages;
+  j["test"] = EvaluationJson(r.test);
+  return j.dump(2) + "\n";
+}
+
+}  // namespace uavsim::pipeline

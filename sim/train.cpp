@@ -1,0 +1,213 @@
+#include "sim/train.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+
+#include "pipeline/model_bundle.h"
+#include "pipeline/torch_runtime.h"
+#include "results/run_directory.h"
+#include "sim/core/progress.h"
+#include "sim/core/rng.h"
+#include "sim/core/trajectory.h"
+#include "sim/run.h"
+
+namespace uavsim::sim {
+namespace {
+
+// Where the scenario's own target flies: the box its trajectory covers over
+// the scenario's duration (sampled every 0.25 s, up to 10 minutes).
+struct FlightRegion {
+  Eigen::Vector3d lo, hi;
+  Eigen::Vector3d centre() const { return 0.5 * (lo + hi); }
+  Eigen::Vector3d half() const { return 0.5 * (hi - lo); }
+};
+
+FlightRegion RegionOf(const Scenario& s) {
+  const UavConfig& target = s.uavs.front();
+  const auto trajectory = core::MakeTrajectory(
+      target.trajectory, core::RngStream(s.seed, "uav/" + target.id + "/trajectory"));
+  FlightRegion r{Eigen::Vector3d::Constant(1e300), Eigen::Vector3d::Constant(-1e300)};
+  const double span = std::min(s.duration_s, 600.0);
+  for (double t = 0.0; t <= span; t += 0.25) {
+    const Eigen::Vector3d p = trajectory->StateAt(t).position_m;
+    r.lo = r.lo.cwiseMin(p);
+    r.hi = r.hi.cwiseMax(p);
+  }
+  // Widen: training should cover the neighbourhood of the scenario's flight.
+  r.lo -= Eigen::Vector3d(10.0, 10.0, 10.0);
+  r.hi += Eigen::Vector3d(10.0, 10.0, 10.0);
+  r.lo.z() = std::max(r.lo.z(), 5.0);
+  r.hi.z() = std::max(r.hi.z(), r.lo.z() + 5.0);
+  return r;
+}
+
+core::Json Vec(const Eigen::Vector3d& v) { return core::Json::array({v.x(), v.y(), v.z()}); }
+
+// A trajectory of type i % 3 inside the region, within the target's limits.
+core::Json DrawTrajectory(const core::TrajectoryConfig& limits, const FlightRegion& r, int i,
+                          core::RngStream& rng, std::string& label) {
+  const double v_max = limits.max_speed_mps, a_max = limits.max_accel_mps2;
+  const Eigen::Vector3d c = r.centre(), h = r.half();
+  const double h_xy = std::max(5.0, std::max(h.x(), h.y()) - 10.0);
+  Eigen::Vector3d centre(c.x() + rng.Uniform(-0.3, 0.3) * h_xy,
+                         c.y() + rng.Uniform(-0.3, 0.3) * h_xy, rng.Uniform(r.lo.z(), r.hi.z()));
+  core::Json t = {{"max_speed_mps", v_max}, {"max_accel_mps2", a_max}};
+  switch (i % 3) {
+    case 0: {
+      const double radius = std::max(5.0, rng.Uniform(0.4, 1.3) * h_xy);
+      const double speed =
+          rng.Uniform(0.3, 0.9) * std::min(v_max, std::sqrt(0.95 * a_max * radius));
+      t.update({{"type", "orbit"},
+                {"center_m", Vec(centre)},
+                {"radius_m", radius},
+                {"speed_mps", speed},
+                {"clockwise", rng.Bernoulli(0.5)},
+                {"phase_deg", rng.Uniform(0.0, 360.0)}});
+      label = "orbit r " + core::FormatNumber(std::round(radius)) + " m";
+      break;
+    }
+    case 1: {
+      const double ax = rng.Uniform(1.0, 2.4) * h_xy, ay = rng.Uniform(0.6, 1.6) * h_xy;
+      // Gerono lemniscate: peak speed <= w sqrt(A^2 + B^2), peak accel <= w^2 sqrt(A^2 + 4 B^2)
+      // with A = ax / 2, B = ay / 2; choose the period so both hold.
+      const double a = ax / 2, b = ay / 2;
+      const double w =
+          std::min(0.9 * v_max / std::hypot(a, b), std::sqrt(0.9 * a_max / std::hypot(a, 2 * b)));
+      const double period = std::max(2 * M_PI / w, rng.Uniform(20.0, 50.0));
+      t.update({{"type", "figure8"},
+                {"center_m", Vec(centre)},
+                {"size_m", {ax, ay}},
+                {"period_s", period},
+                {"heading_deg", rng.Uniform(0.0, 360.0)}});
+      label = "figure8 " + core::FormatNumber(std::round(ax)) + " x " +
+              core::FormatNumber(std::round(ay)) + " m";
+      break;
+    }
+    default:
+      t.update({{"type", "random"}, {"min_m", Vec(r.lo)}, {"max_m", Vec(r.hi)}});
+      label = "random flight";
+      break;
+  }
+  return t;
+}
+
+}  // namespace
+
+Scenario EpisodeScenario(const Scenario& base, const EpisodePlan& plan, int i, std::string* label) {
+  core::RngStream rng(plan.seed, "train/episode/" + std::to_string(i));
+  core::Json doc = ResolvedJson(base);
+  std::string what;
+  doc["uavs"][0]["trajectory"] =
+      DrawTrajectory(base.uavs.front().trajectory, RegionOf(base), i, rng, what);
+  doc["seed"] = rng.NextU64() >> 12;
+  doc["duration_s"] = plan.episode_s;
+  doc["name"] = base.name + "-episode-" + std::to_string(i);
+  doc["pipeline"]["methods"] = core::Json::array();
+  if (plan.vary_weather) {
+    doc["weather"]["rain_mm_h"] = rng.Bernoulli(0.3) ? rng.Uniform(1.0, 25.0) : 0.0;
+    if (rng.Bernoulli(0.2))
+      doc["weather"]["fog_visibility_m"] = rng.Uniform(300.0, 2000.0);
+    else
+      doc["weather"].erase("fog_visibility_m");
+    const double rain = doc["weather"]["rain_mm_h"].get<double>();
+    if (rain > 0) what += ", rain " + core::FormatNumber(std::round(rain)) + " mm/h";
+    if (doc["weather"].contains("fog_visibility_m"))
+      what += ", fog " +
+              core::FormatNumber(std::round(doc["weather"]["fog_visibility_m"].get<double>())) +
+              " m";
+  }
+  if (plan.vary_loss) {
+    const double p = rng.Uniform(0.0, 0.3);
+    for (auto& [name, link] : doc["links"].items())
+      link["loss"] = {{"type", "bernoulli"}, {"p", p}};
+    what += ", loss " + core::FormatNumber(std::round(p * 100)) + " %";
+  }
+  if (label) *label = what;
+  return ScenarioFromJson(doc, base.name + " (training episode " + std::to_string(i) + ")",
+                          base.base_dir);
+}
+
+pipeline::Episode SimulateEpisode(const Scenario& s) {
+  pipeline::Episode episode;
+  RunOptions o;
+  o.quiet = true;
+  o.collect = &episode;
+  RunScenario(s, o);
+  return episode;
+}
+
+std::vector<pipeline::Episode> SimulateEpisodes(const Scenario& base, const EpisodePlan& plan,
+                                                bool quiet) {
+  std::vector<pipeline::Episode> episodes;
+  core::Progress progress("simulate training episodes", plan.episodes, "episodes", quiet);
+  for (int i = 0; i < plan.episodes; ++i) {
+    std::string label;
+    const Scenario s = EpisodeScenario(base, plan, plan.first_episode + i, &label);
+    pipeline::Episode e = SimulateEpisode(s);
+    e.label = label;
+    episodes.push_back(std::move(e));
+    progress.Update(i + 1);
+  }
+  progress.Finish();
+  return episodes;
+}
+
+pipeline::Dataset SplitByTrajectory(std::vector<pipeline::Episode> episodes, std::uint64_t seed) {
+  const std::size_t n = episodes.size();
+  std::vector<std::size_t> order(n);
+  for (std::size_t i = 0; i < n; ++i) order[i] = i;
+  core::RngStream rng(seed, "train/split");
+  for (std::size_t i = n; i > 1; --i) std::swap(order[i - 1], order[rng.UniformInt(i)]);
+  const std::size_t held = n >= 3 ? std::max<std::size_t>(1, std::lround(0.15 * n)) : 0;
+  pipeline::Dataset d;
+  for (std::size_t j = 0; j < n; ++j) {
+    pipeline::Episode& e = episodes[order[j]];
+    (j < held ? d.test : j < 2 * held ? d.validation : d.train).push_back(std::move(e));
+  }
+  return d;
+}
+
+pipeline::TrainReport RunTraining(const Scenario& base, const TrainCommand& c) {
+  EpisodePlan plan;
+  plan.seed = c.seed;
+  pipeline::TrainOptions t;
+  t.seed = c.seed;
+  t.quiet = c.quiet;
+  t.latent_dim = base.pipeline.latent_dim;
+  t.window_s = base.pipeline.window_s;
+  if (c.quick) {
+    // A small model in well under 3 minutes on 2 cores, for tests.
+    plan.episodes = 6;
+    plan.episode_s = 8.0;
+    t.stage1_max_epochs = 8;
+    t.stage1_patience = 3;
+    t.stage1_max_samples_per_epoch = 480;
+    t.stage2_max_epochs = 60;
+    t.stage2_patience = 15;
+    t.stage2_sequence_windows = 30;
+  }
+  if (c.episodes > 0) plan.episodes = c.episodes;
+  if (c.episode_s > 0) plan.episode_s = c.episode_s;
+
+  results::RunDirectory dir(c.out_dir, c.force);  // the model folder, all-or-nothing
+  pipeline::InitTorch(c.threads, c.seed);
+  pipeline::Dataset data = SplitByTrajectory(SimulateEpisodes(base, plan, c.quiet), c.seed);
+
+  pipeline::ModelManifest manifest;
+  manifest.scenario = base.name;
+  manifest.layout_hash = LayoutHash(base);
+  manifest.note = "trained by `" + c.command_line + "` (seed " + std::to_string(c.seed) + ", " +
+                  std::to_string(plan.episodes) + " episodes of " +
+                  core::FormatNumber(plan.episode_s) + " s, split " +
+                  std::to_string(data.train.size()) + "/" + std::to_string(data.validation.size()) +
+                  "/" + std::to_string(data.test.size()) + " by trajectory)";
+  pipeline::InitTorch(c.threads, c.seed);  // reseed: the weights do not depend on the simulation
+  const pipeline::TrainReport report =
+      pipeline::TrainUavLoc(data, t, manifest, dir.StagingPath("."));
+  dir.Commit();
+  return report;
+}
+
+}  // namespace uavsim::sim

@@ -1,0 +1,61 @@
+// `uavsim train`: training data by simulation and the two-stage training of
+// UAVLoc (pipeline/trainer.h). Each episode is the scenario with its own
+// target trajectory (orbits, figure-eights and random flights around the
+// scenario's own flight region), seed, weather (rain, fog) and uplink loss;
+// episodes are split 70/15/15 by trajectory into training, validation and
+// held-out test sets.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "pipeline/dataset.h"
+#include "pipeline/trainer.h"
+#include "sim/scenario.h"
+
+namespace uavsim::sim {
+
+struct EpisodePlan {
+  int episodes = 30;         // trajectories
+  double episode_s = 20.0;   // simulated seconds each
+  std::uint64_t seed = 1;    // draws the variations
+  bool vary_weather = true;  // rain and fog draws
+  bool vary_loss = true;     // uplink Bernoulli loss in [0, 0.3]
+  int first_episode = 0;     // index of the first episode (held-out sets use others)
+};
+
+// The scenario of episode i: `base` with the target's trajectory, seed,
+// weather and loss drawn from the plan. `label` says what was drawn.
+Scenario EpisodeScenario(const Scenario& base, const EpisodePlan& plan, int i,
+                         std::string* label = nullptr);
+
+// Simulates one episode and collects its samples (no files written).
+pipeline::Episode SimulateEpisode(const Scenario& s);
+
+// Episodes first_episode .. first_episode + episodes - 1, in order.
+std::vector<pipeline::Episode> SimulateEpisodes(const Scenario& base, const EpisodePlan& plan,
+                                                bool quiet);
+
+// Splits by trajectory: 15 % test and 15 % validation (at least one each when
+// there are three or more episodes), the rest training; which episode goes
+// where is a seeded shuffle.
+pipeline::Dataset SplitByTrajectory(std::vector<pipeline::Episode> episodes, std::uint64_t seed);
+
+struct TrainCommand {
+  std::string scenario_file;
+  std::string out_dir;  // the model folder
+  bool force = false;
+  bool quick = false;
+  bool quiet = false;
+  std::uint64_t seed = 1;
+  int episodes = 0;        // 0: the default for quick / full
+  double episode_s = 0.0;  // 0: the default for quick / full
+  int threads = 2;
+  std::string command_line;  // written into the model's note
+};
+
+// Runs the whole command: simulate, train, write the model folder
+// atomically. Returns the report.
+pipeline::TrainReport RunTraining(const Scenario& base, const TrainCommand& c);
+
+}  // namespace uavsim::sim
