@@ -10,6 +10,7 @@ struct EdgeLocalizer::Impl {
   explicit Impl(UavLocModel m) : model(std::move(m)) {}
   UavLocModel model;
   bool has_seen_data = false;
+  std::optional<std::int64_t> last_window;
 };
 
 EdgeLocalizer::EdgeLocalizer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -34,6 +35,12 @@ std::unique_ptr<EdgeLocalizer> EdgeLocalizer::Create(int latent_dim, double wind
 
 std::optional<Eigen::Vector3d> EdgeLocalizer::OnWindow(const WindowInputs& window) {
   const Eigen::Vector3d p = impl_->model->Step(window);
+  // A gap the model cannot step through restarts it from a zero state: it
+  // has then seen nothing again.
+  if (impl_->last_window &&
+      window.window - *impl_->last_window > UavLocModelImpl::kMaxGapWindows + 1)
+    impl_->has_seen_data = false;
+  impl_->last_window = window.window;
   const TeAlign& align = impl_->model->te_align();
   for (const auto& frames : window.frames)
     for (const LatentFrame& f : frames)
@@ -45,6 +52,7 @@ std::optional<Eigen::Vector3d> EdgeLocalizer::OnWindow(const WindowInputs& windo
 void EdgeLocalizer::Reset() {
   impl_->model->ResetState();
   impl_->has_seen_data = false;
+  impl_->last_window.reset();
 }
 
 int EdgeLocalizer::latent_dim() const { return impl_->model->config().latent_dim; }

@@ -77,6 +77,14 @@ std::vector<const Sample*> SamplesOf(const std::vector<Episode>& episodes, Modal
   return out;
 }
 
+// At most `n` of `all`, evenly spaced (every episode and time represented).
+std::vector<const Sample*> EvenSubset(const std::vector<const Sample*>& all, int n) {
+  if (static_cast<int>(all.size()) <= n) return all;
+  std::vector<const Sample*> out;
+  for (int i = 0; i < n; ++i) out.push_back(all[all.size() * static_cast<std::size_t>(i) / n]);
+  return out;
+}
+
 IbInput MakeInput(const std::vector<const Sample*>& batch, Modality m, const IbNormalization& n) {
   if (m == Modality::kCamera) {
     std::vector<const CameraObservation*> obs;
@@ -123,8 +131,16 @@ IbCcModel TrainEncoder(Modality m, const Dataset& data, const TrainOptions& o,
   config.beta = o.beta;
   config.normalization = norm;
   IbCcModel model(config);
-  const std::vector<const Sample*> train = SamplesOf(data.train, m);
-  const std::vector<const Sample*> val = SamplesOf(data.validation, m);
+  std::vector<const Sample*> train = SamplesOf(data.train, m);
+  std::vector<const Sample*> val = SamplesOf(data.validation, m);
+  if (val.empty() && train.size() >= 14) {
+    // The validation trajectories never saw this modality: hold back every
+    // seventh training observation instead.
+    std::vector<const Sample*> kept;
+    for (std::size_t i = 0; i < train.size(); ++i) (i % 7 == 6 ? val : kept).push_back(train[i]);
+    train = std::move(kept);
+  }
+  val = EvenSubset(val, o.stage1_max_validation_samples);
   report.name = kPartNames[static_cast<int>(m)];
   report.train_items = train.size();
   report.validation_items = val.size();
@@ -144,13 +160,17 @@ IbCcModel TrainEncoder(Modality m, const Dataset& data, const TrainOptions& o,
   stopping.Add(0, report.initial_validation_loss);
   core::Progress progress(std::string("train stage 1: ") + report.name, o.stage1_max_epochs,
                           "epochs", o.quiet);
-  const std::int64_t per_epoch = std::min<std::int64_t>(static_cast<std::int64_t>(train.size()),
-                                                        o.stage1_max_samples_per_epoch);
+  const auto n = static_cast<std::int64_t>(train.size());
+  const std::int64_t per_epoch =
+      std::clamp<std::int64_t>(n, o.stage1_min_samples_per_epoch, o.stage1_max_samples_per_epoch);
   int epoch = 1;
   for (; epoch <= o.stage1_max_epochs; ++epoch) {
     model->train();
-    const torch::Tensor order = torch::randperm(static_cast<std::int64_t>(train.size()),
-                                                torch::TensorOptions().dtype(torch::kLong));
+    // Shuffled passes over the training set, as many as fill the epoch.
+    std::vector<torch::Tensor> passes;
+    for (std::int64_t drawn = 0; drawn < per_epoch; drawn += n)
+      passes.push_back(torch::randperm(n, torch::TensorOptions().dtype(torch::kLong)));
+    const torch::Tensor order = torch::cat(passes);
     const auto* idx = order.data_ptr<std::int64_t>();
     for (std::int64_t i = 0; i + 1 < per_epoch; i += o.stage1_batch) {
       std::vector<const Sample*> batch;
@@ -321,8 +341,8 @@ UavLocModel TrainFusion(const std::vector<WindowSequence>& train,
   // An epoch sees about every training window twice.
   std::int64_t windows = 0;
   for (const WindowSequence& s : train) windows += s.latents.size(0);
-  const std::int64_t steps =
-      std::max<std::int64_t>(1, 2 * windows / (k * static_cast<std::int64_t>(o.stage2_batch)));
+  const std::int64_t steps = std::max<std::int64_t>(
+      o.stage2_min_steps_per_epoch, 2 * windows / (k * static_cast<std::int64_t>(o.stage2_batch)));
   int epoch = 1;
   for (; epoch <= o.stage2_max_epochs; ++epoch) {
     model->train();
@@ -396,10 +416,43 @@ core::Json EvaluationJson(const Evaluation& ev) {
 
 }  // namespace
 
+void TrainOptions::Validate() const {
+  const auto require = [](bool ok, const char* field, const std::string& rule) {
+    if (!ok) throw std::invalid_argument(std::string("TrainOptions: ") + field + " " + rule);
+  };
+  require(latent_dim >= 2 && latent_dim % 2 == 0, "latent_dim", "must be even and >= 2");
+  require(window_s > 0 && std::isfinite(window_s), "window_s", "must be > 0");
+  require(dropout >= 0 && dropout < 1, "dropout", "must be in [0, 1)");
+  require(beta >= 0 && std::isfinite(beta), "beta", "must be >= 0");
+  require(stage1_lr > 0 && stage2_lr > 0, "stage1_lr and stage2_lr", "must be > 0");
+  require(stage1_batch >= 2 && stage2_batch >= 1, "stage1_batch and stage2_batch",
+          "must be >= 2 and >= 1");
+  require(stage1_max_epochs >= 0 && stage2_max_epochs >= 0, "max_epochs", "must be >= 0");
+  require(stage1_patience >= 1 && stage2_patience >= 1, "patience", "must be >= 1");
+  require(stage1_min_samples_per_epoch >= 2 &&
+              stage1_max_samples_per_epoch >= stage1_min_samples_per_epoch,
+          "stage1_min/max_samples_per_epoch", "must satisfy 2 <= min <= max");
+  require(stage1_max_validation_samples >= 1, "stage1_max_validation_samples", "must be >= 1");
+  require(stage2_sequence_windows >= 1 && stage2_min_steps_per_epoch >= 1,
+          "stage2_sequence_windows and stage2_min_steps_per_epoch", "must be >= 1");
+  require(
+      modality_dropout >= 0 && modality_dropout <= 1 && window_dropout >= 0 && window_dropout <= 1,
+      "modality_dropout and window_dropout", "must be in [0, 1]");
+  require(d_model >= 1 && layers >= 1, "d_model and layers", "must be >= 1");
+}
+
 TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& o, const ModelManifest& manifest,
                         const std::string& out_dir) {
+  o.Validate();
   if (data.train.empty() || data.validation.empty())
     throw std::invalid_argument("train: need at least one training and one validation episode");
+  for (const auto* part : {&data.train, &data.validation, &data.test})
+    for (const Episode& e : *part)
+      if (std::abs(e.window_s - o.window_s) > 1e-12)
+        throw std::invalid_argument("train: episode \"" + e.label + "\" has " +
+                                    core::FormatNumber(e.window_s) + " s windows, training " +
+                                    core::FormatNumber(o.window_s) + " s");
+  torch::manual_seed(o.seed);
   std::vector<Eigen::Vector3d> positions;
   for (const Episode& e : data.train)
     positions.insert(positions.end(), e.window_truth.begin(), e.window_truth.end());

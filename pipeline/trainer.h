@@ -30,20 +30,26 @@ struct TrainOptions {
   // Stage 1 (per modality).
   double stage1_lr = 1e-3;
   int stage1_batch = 32;
-  int stage1_max_epochs = 40;
+  int stage1_max_epochs = 30;
   int stage1_patience = 6;
-  int stage1_max_samples_per_epoch = 4000;  // an epoch draws at most this many
+  int stage1_min_samples_per_epoch = 640;    // small data sets are cycled ...
+  int stage1_max_samples_per_epoch = 3000;   // ... large ones sampled
+  int stage1_max_validation_samples = 1024;  // evenly spaced over the validation episodes
   // Stage 2.
   double stage2_lr = 1e-3;
   int stage2_batch = 16;
-  int stage2_sequence_windows = 50;  // K of a training crop
-  int stage2_max_epochs = 200;
+  int stage2_sequence_windows = 60;  // K of a training crop
+  int stage2_max_epochs = 150;
   int stage2_patience = 20;
+  int stage2_min_steps_per_epoch = 20;
   double modality_dropout = 0.2;  // P(a modality is missing for a whole crop)
   double window_dropout = 0.1;    // P(a modality is missing in one window)
   // Edge network sizes (paper silent; DESIGN.md: d_state 16, d_conv 4, expand 2).
   int d_model = 64;
   int layers = 2;
+
+  // Throws std::invalid_argument naming the first bad field.
+  void Validate() const;
 };
 
 struct StageReport {
@@ -73,8 +79,12 @@ struct TrainReport {
 // Trains on `data` and writes the model folder `out_dir` (model.json from
 // `manifest` with latent_dim and window_s set from the options, the parts,
 // training_report.json; checkpoints under out_dir/checkpoints while
-// training, removed at the end). Throws std::invalid_argument if the training
-// or validation split is empty, std::runtime_error for I/O.
+// training, removed at the end). Seeds LibTorch's generator with
+// options.seed first; call InitTorch() before. A modality with observations
+// in training but none in validation is validated on every seventh training
+// observation instead. Throws std::invalid_argument for invalid options, an
+// empty training or validation split, or episodes whose window_s differs from
+// the options', std::runtime_error for I/O.
 TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& options,
                         const ModelManifest& manifest, const std::string& out_dir);
 

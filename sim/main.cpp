@@ -70,8 +70,10 @@ const char* kRunHelp =
     "                               [--set /json/pointer=value]... [--force] [--quiet]\n"
     "\n"
     "Runs the scenario and writes DIR (default runs/NAME-sSEED): manifest.json, truth.csv,\n"
-    "metrics.json and, as the models land, estimates.csv, rate_snr.csv and recorded frames.\n"
-    "The directory appears only when the run is complete.\n"
+    "estimates.csv, metrics.json (RMSE per method, packets, data rates), rate_snr.csv/.png\n"
+    "and recorded frames. The directory appears only when the run is complete. The\n"
+    "`uavloc` method uses the model /pipeline/model names (\"default\": the one shipped\n"
+    "for scenarios/default.json; `uavsim train` makes others).\n"
     "\n"
     "  --out DIR       run directory (refused if it exists, unless --force)\n"
     "  --seed N        override the scenario's seed (same as --set /seed=N)\n"
@@ -90,7 +92,8 @@ const char* kSweepHelp =
 
 const char* kTrainHelp =
     "usage: uavsim train SCENARIO.json [--out MODEL] [--quick] [--seed N] [--episodes N]\n"
-    "                    [--episode-s S] [--threads N] [--set /ptr=value] [--force] [--quiet]\n"
+    "                    [--episode-s S] [--lr RATE] [--threads N] [--data FILE]\n"
+    "                    [--set /ptr=value] [--force] [--quiet]\n"
     "\n"
     "Generates training data by simulation and trains the UAVLoc model with LibTorch on\n"
     "the CPU. Each episode is the scenario with its own target trajectory (orbit,\n"
@@ -102,11 +105,14 @@ const char* kTrainHelp =
     "and training_report.json (losses and held-out RMSE); use it with\n"
     "--set /pipeline/model=MODEL or \"pipeline\": {\"model\": \"MODEL\"}.\n"
     "\n"
-    "  --quick        a small model in under 3 minutes on 2 cores (6 episodes of 8 s)\n"
-    "  --episodes N   trajectories to simulate (default 30)\n"
+    "  --quick        a small model in under 3 minutes (12 dry episodes of 10 s)\n"
+    "  --episodes N   trajectories to simulate (default 40, at least 3)\n"
     "  --episode-s S  simulated seconds each (default 20)\n"
     "  --seed N       seeds the episodes, the split and the weights (default 1)\n"
-    "  --threads N    LibTorch threads (default 2); results depend on it\n"
+    "  --lr RATE      Adam's learning rate for both stages (default 1e-3; see NOTES.md)\n"
+    "  --threads N    LibTorch threads (default 1); results depend on it\n"
+    "  --data FILE    the simulated episodes: read FILE if it exists (no simulation),\n"
+    "                 else simulate and write it (train again without simulating)\n"
     "  --force        replace an existing MODEL folder\n";
 
 const char* kBenchHelp =
@@ -119,7 +125,8 @@ const char* kBenchHelp =
     "             with 1e3..1e6 pending events; events per second\n"
     "  link       messages per second through one uplink under the event core\n"
     "  beam       downlink beam evaluations per second (channel, steering, gain)\n"
-    "  pipeline   node encoders and edge inference (arrives with the UAVLoc pipeline)\n"
+    "  pipeline   IB-CC encode per frame (camera, LiDAR, radar) and edge inference per\n"
+    "             window, one thread\n"
     "  all        everything available (default)\n";
 
 // Flags of one command: name -> takes a value.
@@ -265,9 +272,10 @@ std::uint64_t UnsignedOption(const std::string& cmd, const std::string& name, co
 }
 
 int Train(int argc, char** argv) {
-  const ParsedArgs a = Parse("train", argc, argv, 2,
-                             {"--out", "--seed", "--episodes", "--episode-s", "--threads", "--set"},
-                             {"--quick", "--quiet", "--force", "--help"});
+  const ParsedArgs a = Parse(
+      "train", argc, argv, 2,
+      {"--out", "--seed", "--episodes", "--episode-s", "--threads", "--set", "--data", "--lr"},
+      {"--quick", "--quiet", "--force", "--help"});
   if (a.Has("--help")) return std::cout << kTrainHelp, kExitOk;
   const std::string& file = OneScenario("train", a);
   uavsim::sim::TrainCommand c;
@@ -275,6 +283,7 @@ int Train(int argc, char** argv) {
   c.quick = a.Has("--quick");
   c.quiet = a.Has("--quiet");
   c.force = a.Has("--force");
+  c.data_file = a.Value("--data").value_or("");
   if (auto v = a.Value("--seed")) c.seed = UnsignedOption("train", "--seed", *v, ~0ull >> 1);
   if (auto v = a.Value("--episodes"))
     c.episodes = static_cast<int>(UnsignedOption("train", "--episodes", *v, 100000));
@@ -287,11 +296,18 @@ int Train(int argc, char** argv) {
       throw UsageError("uavsim train: --episode-s expects seconds from 1 to 3600, got '" + *v +
                        "'");
   }
+  if (auto v = a.Value("--lr")) {
+    char* end = nullptr;
+    c.learning_rate = std::strtod(v->c_str(), &end);
+    if (v->empty() || *end != '\0' || !(c.learning_rate > 0.0 && c.learning_rate <= 1.0))
+      throw UsageError("uavsim train: --lr expects a learning rate in (0, 1], got '" + *v + "'");
+  }
   if ((a.Value("--episodes") && c.episodes < 3) || (a.Value("--threads") && c.threads < 1))
     throw UsageError(
         "uavsim train: --episodes needs at least 3 (training, validation, test) and --threads "
         "at least 1");
-  for (int i = 0; i < argc; ++i) c.command_line += (i ? " " : "") + std::string(argv[i]);
+  c.command_line = "uavsim";
+  for (int i = 1; i < argc; ++i) c.command_line += " " + std::string(argv[i]);
   const uavsim::sim::Scenario s = uavsim::sim::LoadScenario(file, Overrides(a));
   c.out_dir = a.Value("--out").value_or("models/" + s.name);
   const uavsim::pipeline::TrainReport r = uavsim::sim::RunTraining(s, c);

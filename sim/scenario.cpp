@@ -186,8 +186,15 @@ void CheckScenario(const Scenario& s, const std::string& file) {
       if (n.uplink == name) users.push_back(n.id);
     channel::CheckOutageNodes(link, users, file, "/links/" + name);
   }
-  if (s.pipeline.model != "default")
-    RequireFile(file, "/pipeline/model", s.base_dir, s.pipeline.model);
+  if (s.pipeline.model != "default") {
+    // A model folder (with its model.json) or the manifest itself.
+    namespace fs = std::filesystem;
+    const fs::path p = (fs::path(s.base_dir) / s.pipeline.model).lexically_normal();
+    std::error_code ec;
+    RequireFile(file, "/pipeline/model", s.base_dir,
+                fs::is_directory(p, ec) ? (fs::path(s.pipeline.model) / "model.json").string()
+                                        : s.pipeline.model);
+  }
   if (s.world.city.type == core::CityType::kMesh) {
     namespace fs = std::filesystem;
     const fs::path p = RequireFile(file, "/world/city/path", s.base_dir, s.world.city.path);

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <iostream>
 
+#include "pipeline/dataset_io.h"
 #include "pipeline/model_bundle.h"
 #include "pipeline/torch_runtime.h"
 #include "results/run_directory.h"
@@ -106,8 +107,8 @@ Scenario EpisodeScenario(const Scenario& base, const EpisodePlan& plan, int i, s
   doc["name"] = base.name + "-episode-" + std::to_string(i);
   doc["pipeline"]["methods"] = core::Json::array();
   if (plan.vary_weather) {
-    doc["weather"]["rain_mm_h"] = rng.Bernoulli(0.3) ? rng.Uniform(1.0, 25.0) : 0.0;
-    if (rng.Bernoulli(0.2))
+    doc["weather"]["rain_mm_h"] = rng.Bernoulli(0.2) ? rng.Uniform(1.0, 25.0) : 0.0;
+    if (rng.Bernoulli(0.1))
       doc["weather"]["fog_visibility_m"] = rng.Uniform(300.0, 2000.0);
     else
       doc["weather"].erase("fog_visibility_m");
@@ -179,21 +180,36 @@ pipeline::TrainReport RunTraining(const Scenario& base, const TrainCommand& c) {
   t.window_s = base.pipeline.window_s;
   if (c.quick) {
     // A small model in well under 3 minutes on 2 cores, for tests.
-    plan.episodes = 6;
-    plan.episode_s = 8.0;
-    t.stage1_max_epochs = 8;
-    t.stage1_patience = 3;
+    plan.episodes = 12;
+    plan.episode_s = 10.0;
+    plan.vary_weather = false;
+    t.stage1_max_epochs = 24;
+    t.stage1_patience = 8;
+    t.stage1_min_samples_per_epoch = 480;
     t.stage1_max_samples_per_epoch = 480;
-    t.stage2_max_epochs = 60;
-    t.stage2_patience = 15;
+    t.stage1_max_validation_samples = 512;
+    t.stage2_max_epochs = 40;
+    t.stage2_patience = 10;
     t.stage2_sequence_windows = 30;
   }
+  if (c.learning_rate > 0) t.stage1_lr = t.stage2_lr = c.learning_rate;
   if (c.episodes > 0) plan.episodes = c.episodes;
   if (c.episode_s > 0) plan.episode_s = c.episode_s;
 
   results::RunDirectory dir(c.out_dir, c.force);  // the model folder, all-or-nothing
   pipeline::InitTorch(c.threads, c.seed);
-  pipeline::Dataset data = SplitByTrajectory(SimulateEpisodes(base, plan, c.quiet), c.seed);
+  std::vector<pipeline::Episode> episodes;
+  std::error_code ec;
+  if (!c.data_file.empty() && std::filesystem::is_regular_file(c.data_file, ec)) {
+    episodes = pipeline::ReadEpisodes(c.data_file);
+    plan.episodes = static_cast<int>(episodes.size());
+    if (!episodes.empty() && !episodes.front().window_truth.empty())
+      plan.episode_s = episodes.front().window_s * episodes.front().window_truth.size();
+  } else {
+    episodes = SimulateEpisodes(base, plan, c.quiet);
+    if (!c.data_file.empty()) pipeline::WriteEpisodes(episodes, c.data_file);
+  }
+  pipeline::Dataset data = SplitByTrajectory(std::move(episodes), c.seed);
 
   pipeline::ModelManifest manifest;
   manifest.scenario = base.name;

@@ -16,7 +16,7 @@
 namespace uavsim::sim {
 
 struct EpisodePlan {
-  int episodes = 30;         // trajectories
+  int episodes = 40;         // trajectories
   double episode_s = 20.0;   // simulated seconds each
   std::uint64_t seed = 1;    // draws the variations
   bool vary_weather = true;  // rain and fog draws
@@ -48,9 +48,13 @@ struct TrainCommand {
   bool quick = false;
   bool quiet = false;
   std::uint64_t seed = 1;
-  int episodes = 0;        // 0: the default for quick / full
-  double episode_s = 0.0;  // 0: the default for quick / full
-  int threads = 2;
+  int episodes = 0;            // 0: the default for quick / full
+  double episode_s = 0.0;      // 0: the default for quick / full
+  double learning_rate = 0.0;  // 0: the trainer's default
+  int threads = 1;             // LibTorch intra-op threads (see NOTES.md: 1 is fastest here)
+  // Episode file: read if it exists (no simulation), else written after
+  // simulating. Empty: simulate, keep nothing.
+  std::string data_file;
   std::string command_line;  // written into the model's note
 };
 

@@ -68,7 +68,7 @@ TEST_CASE("CLI: usage errors exit 2 with one line", "[sim]") {
 }
 
 TEST_CASE("CLI: later issues' subcommands say they are not available yet", "[sim]") {
-  for (const char* cmd : {"sweep", "train"}) {
+  for (const char* cmd : {"sweep"}) {
     auto r = RunCli({cmd, kDefault});
     CHECK(r.exit_code == 2);
     CHECK_THAT(r.err, Catch::Contains("not available yet"));
@@ -137,7 +137,10 @@ TEST_CASE("CLI: run writes the run directory of DESIGN.md", "[sim]") {
   CHECK(ReadFile(out + "/estimates.csv").rfind("t_s,method,x_m,y_m,z_m\n", 0) == 0);
   CHECK(metrics["rmse_m"].contains("ekf"));
   CHECK(rates.find(",ekf,") != std::string::npos);
-  CHECK(metrics["unavailable_methods"].contains("uavloc"));
+  // The learned pipeline with the shipped model: estimates, RMSE and beam.
+  CHECK(metrics["rmse_m"].contains("uavloc"));
+  CHECK(rates.find(",uavloc,") != std::string::npos);
+  CHECK(metrics["uavloc_model"]["same_layout"] == true);
 
   const Json manifest = Json::parse(ReadFile(out + "/manifest.json"));
   CHECK(manifest["seed"] == 1);
