@@ -2,6 +2,8 @@
 
 #include <unistd.h>
 
+#include <opencv2/core.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -88,9 +90,11 @@ class Reader {
     std::vector<std::uint8_t> b(Count(1));
     in_.read(reinterpret_cast<char*>(b.data()), static_cast<std::streamsize>(b.size()));
     if (!in_) Fail("truncated");
-    std::vector<float> v(b.size());
-    for (std::size_t i = 0; i < b.size(); ++i) v[i] = static_cast<float>(b[i]) / 255.0f;
-    return v;
+    // The same conversion as the camera pre-processor's (OpenCV's), so a
+    // crop read back is bit for bit the crop that was simulated.
+    cv::Mat f;
+    cv::Mat(1, static_cast<int>(b.size()), CV_8UC1, b.data()).convertTo(f, CV_32F, 1.0 / 255.0);
+    return std::vector<float>(f.ptr<float>(), f.ptr<float>() + f.total());
   }
   [[noreturn]] void Fail(const std::string& what) const {
     throw std::runtime_error(path_ + ": " + what + " (not an episode file of this uavsim?)");

@@ -67,6 +67,38 @@ struct EarlyStopping {
   bool Stop() const { return since_best >= patience; }
 };
 
+// The epochs of one stage: train an epoch, validate, keep (and checkpoint)
+// the best weights, stop when `patience` epochs bring no improvement; ends
+// with the best weights restored, in eval mode. Fills the report's epoch
+// fields; report.initial_validation_loss must be set.
+template <class TrainEpoch, class Validate, class Checkpoint>
+void RunEpochs(torch::nn::Module& model, int max_epochs, int patience, const std::string& label,
+               bool quiet, TrainEpoch train_epoch, Validate validate, Checkpoint checkpoint,
+               StageReport& report) {
+  BestWeights best;
+  best.Take(model);
+  EarlyStopping stopping{patience};
+  stopping.Add(0, report.initial_validation_loss);
+  core::Progress progress(label, max_epochs, "epochs", quiet);
+  int epoch = 1;
+  for (; epoch <= max_epochs; ++epoch) {
+    model.train();
+    train_epoch();
+    if (stopping.Add(epoch, validate())) {
+      best.Take(model);
+      checkpoint(epoch);
+    }
+    progress.Update(epoch);
+    if (stopping.Stop()) break;
+  }
+  progress.Finish();
+  best.Restore(model);
+  model.eval();
+  report.epochs = std::min(epoch, max_epochs);
+  report.best_epoch = stopping.best_epoch;
+  report.best_validation_loss = stopping.best;
+}
+
 // ---- Stage 1: one modality's IB-CC model on its observations ----
 
 std::vector<const Sample*> SamplesOf(const std::vector<Episode>& episodes, Modality m) {
@@ -154,48 +186,34 @@ IbCcModel TrainEncoder(Modality m, const Dataset& data, const TrainOptions& o,
   }
 
   torch::optim::Adam adam(model->parameters(), torch::optim::AdamOptions(o.stage1_lr));
-  BestWeights best;
-  best.Take(*model);
-  EarlyStopping stopping{o.stage1_patience};
-  stopping.Add(0, report.initial_validation_loss);
-  core::Progress progress(std::string("train stage 1: ") + report.name, o.stage1_max_epochs,
-                          "epochs", o.quiet);
   const auto n = static_cast<std::int64_t>(train.size());
   const std::int64_t per_epoch =
       std::clamp<std::int64_t>(n, o.stage1_min_samples_per_epoch, o.stage1_max_samples_per_epoch);
-  int epoch = 1;
-  for (; epoch <= o.stage1_max_epochs; ++epoch) {
-    model->train();
-    // Shuffled passes over the training set, as many as fill the epoch.
-    std::vector<torch::Tensor> passes;
-    for (std::int64_t drawn = 0; drawn < per_epoch; drawn += n)
-      passes.push_back(torch::randperm(n, torch::TensorOptions().dtype(torch::kLong)));
-    const torch::Tensor order = torch::cat(passes);
-    const auto* idx = order.data_ptr<std::int64_t>();
-    for (std::int64_t i = 0; i + 1 < per_epoch; i += o.stage1_batch) {
-      std::vector<const Sample*> batch;
-      for (std::int64_t j = i; j < std::min<std::int64_t>(per_epoch, i + o.stage1_batch); ++j)
-        batch.push_back(train[static_cast<std::size_t>(idx[j])]);
-      if (batch.size() < 2) break;  // BatchNorm needs two
-      adam.zero_grad();
-      const IbOutput out = model->forward(MakeInput(batch, m, norm));
-      model->Loss(out, MakeTarget(batch, norm)).total.backward();
-      adam.step();
-    }
-    const double loss = IbValidationLoss(model, val, o.stage1_batch);
-    if (stopping.Add(epoch, loss)) {
-      best.Take(*model);
-      SaveIbCcModel(model, checkpoint, "checkpoint: epoch " + std::to_string(epoch));
-    }
-    progress.Update(epoch);
-    if (stopping.Stop()) break;
-  }
-  progress.Finish();
-  best.Restore(*model);
-  model->eval();
-  report.epochs = std::min(epoch, o.stage1_max_epochs);
-  report.best_epoch = stopping.best_epoch;
-  report.best_validation_loss = stopping.best;
+  RunEpochs(
+      *model, o.stage1_max_epochs, o.stage1_patience, "train stage 1: " + report.name, o.quiet,
+      [&] {
+        // Shuffled passes over the training set, as many as fill the epoch.
+        std::vector<torch::Tensor> passes;
+        for (std::int64_t drawn = 0; drawn < per_epoch; drawn += n)
+          passes.push_back(torch::randperm(n, torch::TensorOptions().dtype(torch::kLong)));
+        const torch::Tensor order = torch::cat(passes);
+        const auto* idx = order.data_ptr<std::int64_t>();
+        for (std::int64_t i = 0; i + 1 < per_epoch; i += o.stage1_batch) {
+          std::vector<const Sample*> batch;
+          for (std::int64_t j = i; j < std::min<std::int64_t>(per_epoch, i + o.stage1_batch); ++j)
+            batch.push_back(train[static_cast<std::size_t>(idx[j])]);
+          if (batch.size() < 2) break;  // BatchNorm needs two
+          adam.zero_grad();
+          const IbOutput out = model->forward(MakeInput(batch, m, norm));
+          model->Loss(out, MakeTarget(batch, norm)).total.backward();
+          adam.step();
+        }
+      },
+      [&] { return IbValidationLoss(model, val, o.stage1_batch); },
+      [&](int epoch) {
+        SaveIbCcModel(model, checkpoint, "checkpoint: epoch " + std::to_string(epoch));
+      },
+      report);
   report.seconds = SecondsSince(start);
   return model;
 }
@@ -333,40 +351,24 @@ UavLocModel TrainFusion(const std::vector<WindowSequence>& train,
   for (const WindowSequence& s : train) k = std::min<std::int64_t>(k, s.latents.size(0));
 
   torch::optim::Adam adam(model->parameters(), torch::optim::AdamOptions(o.stage2_lr));
-  BestWeights best;
-  best.Take(*model);
-  EarlyStopping stopping{o.stage2_patience};
-  stopping.Add(0, report.initial_validation_loss);
-  core::Progress progress("train stage 2: fusion + Mamba", o.stage2_max_epochs, "epochs", o.quiet);
   // An epoch sees about every training window twice.
   std::int64_t windows = 0;
   for (const WindowSequence& s : train) windows += s.latents.size(0);
   const std::int64_t steps = std::max<std::int64_t>(
       o.stage2_min_steps_per_epoch, 2 * windows / (k * static_cast<std::int64_t>(o.stage2_batch)));
-  int epoch = 1;
-  for (; epoch <= o.stage2_max_epochs; ++epoch) {
-    model->train();
-    for (std::int64_t step = 0; step < steps; ++step) {
-      torch::Tensor truth;
-      const FusionBatch b = DrawCrops(train, o.stage2_batch, k, o, truth);
-      adam.zero_grad();
-      MaskedMse(model->forward(b.latents, b.mask), truth, b.mask).backward();
-      adam.step();
-    }
-    const double loss = FusionValidationLoss(model, val);
-    if (stopping.Add(epoch, loss)) {
-      best.Take(*model);
-      SaveUavLocModel(model, checkpoint);
-    }
-    progress.Update(epoch);
-    if (stopping.Stop()) break;
-  }
-  progress.Finish();
-  best.Restore(*model);
-  model->eval();
-  report.epochs = std::min(epoch, o.stage2_max_epochs);
-  report.best_epoch = stopping.best_epoch;
-  report.best_validation_loss = stopping.best;
+  RunEpochs(
+      *model, o.stage2_max_epochs, o.stage2_patience, "train stage 2: fusion + Mamba", o.quiet,
+      [&] {
+        for (std::int64_t step = 0; step < steps; ++step) {
+          torch::Tensor truth;
+          const FusionBatch b = DrawCrops(train, o.stage2_batch, k, o, truth);
+          adam.zero_grad();
+          MaskedMse(model->forward(b.latents, b.mask), truth, b.mask).backward();
+          adam.step();
+        }
+      },
+      [&] { return FusionValidationLoss(model, val); },
+      [&](int) { SaveUavLocModel(model, checkpoint); }, report);
   report.seconds = SecondsSince(start);
   return model;
 }

@@ -72,11 +72,6 @@ struct NodeContent {
   std::size_t sample = 0;     // index in the collected episode, when collecting
 };
 
-// Whether a node's pre-processing found anything to send.
-bool FoundSomething(const NodeContent& c) {
-  return (c.camera && c.camera->detected) || (c.points && c.points->count() > 0);
-}
-
 // The trained model a scenario names, loaded for the run loop. Throws
 // core::ConfigError naming the scenario's /pipeline/model when it is missing
 // or does not fit the scenario.
@@ -120,9 +115,15 @@ std::unique_ptr<pipeline::UavLocModelFiles> LoadModel(const Scenario& s, const s
   return model;
 }
 
+// Whether a node's pre-processing found anything to send.
+bool FoundSomething(const NodeContent& c) {
+  return (c.camera && c.camera->detected) || (c.points && c.points->count() > 0);
+}
+
 // Bytes a pre-processed observation takes: the two ROI crops at 8 bits plus
 // their geometry, or the points as float32.
 std::uint64_t PreprocessedBytes(const NodeContent& c) {
+  if (!FoundSomething(c)) return 0;  // nothing to send
   if (c.camera)
     return 2ull * pipeline::CameraObservation::kCropPx * pipeline::CameraObservation::kCropPx + 64;
   if (c.points) return 4ull * c.points->values.size();
