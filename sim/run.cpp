@@ -416,10 +416,10 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
           const std::int64_t k = tick + 1;
           pipeline::WindowInputs inputs;
           inputs.window = k;
-          if (auto it = pending.find(k); it != pending.end()) {
-            inputs = std::move(it->second);
-            pending.erase(it);
-          }
+          if (auto it = pending.find(k); it != pending.end()) inputs = std::move(it->second);
+          // Windows up to k are done (an arrival stamped exactly at a passed
+          // deadline would otherwise linger).
+          pending.erase(pending.begin(), pending.upper_bound(k));
           if (const auto p = uavloc->edge().OnWindow(inputs)) estimated["uavloc"] = *p;
         }
         if (ekf) {

@@ -3,6 +3,7 @@
 // missing file is refused with its path named.
 #include <catch2/catch.hpp>
 #include <filesystem>
+#include <opencv2/core.hpp>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -13,6 +14,15 @@
 
 namespace uavsim::pipeline {
 namespace {
+
+// The 8-bit grey k as the camera pre-processor makes it a float (OpenCV's
+// convertTo with scale 1/255: not always the same float as k / 255.0f).
+float Grey(int k) {
+  const std::uint8_t b = static_cast<std::uint8_t>(k);
+  cv::Mat f;
+  cv::Mat(1, 1, CV_8UC1, const_cast<std::uint8_t*>(&b)).convertTo(f, CV_32F, 1.0 / 255.0);
+  return f.at<float>(0, 0);
+}
 
 namespace fs = std::filesystem;
 
@@ -31,8 +41,8 @@ Sample CameraSample(double t, std::uint32_t node, bool on_time, int shift, int c
   c.crop_left.resize(n);
   c.crop_right.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
-    c.crop_left[i] = static_cast<float>((i + static_cast<std::size_t>(shift)) % 256) / 255.0f;
-    c.crop_right[i] = static_cast<float>((i * 7 + 3) % 256) / 255.0f;
+    c.crop_left[i] = Grey(static_cast<int>((i + static_cast<std::size_t>(shift)) % 256));
+    c.crop_right[i] = Grey(static_cast<int>((i * 7 + 3) % 256));
   }
   c.centre_left_px = {321.5f, 199.25f};
   c.centre_right_px = {300.125f, 200.75f};
@@ -184,7 +194,7 @@ TEST_CASE("DatasetIo: crops are stored as the nearest 8-bit grey", "[pipeline]")
   episodes[0].samples[0].camera->crop_left = {0.502f, -0.25f, 1.75f, 0.098f};
   WriteEpisodes(episodes, path);
   const std::vector<float> left = ReadEpisodes(path).at(0).samples.at(0).camera->crop_left;
-  CHECK(left == std::vector<float>{128.0f / 255.0f, 0.0f, 1.0f, 25.0f / 255.0f});
+  CHECK(left == std::vector<float>{Grey(128), Grey(0), Grey(255), Grey(25)});
 }
 
 TEST_CASE("DatasetIo: a truncated file is refused with its path named", "[pipeline]") {
