@@ -203,6 +203,7 @@ IbCcModel TrainEncoder(Modality m, const Dataset& data, const TrainOptions& o,
           for (std::int64_t j = i; j < std::min<std::int64_t>(per_epoch, i + o.stage1_batch); ++j)
             batch.push_back(train[static_cast<std::size_t>(idx[j])]);
           if (batch.size() < 2) break;  // BatchNorm needs two
+          if (o.check_stop) o.check_stop();
           adam.zero_grad();
           const IbOutput out = model->forward(MakeInput(batch, m, norm));
           model->Loss(out, MakeTarget(batch, norm)).total.backward();
@@ -362,6 +363,7 @@ UavLocModel TrainFusion(const std::vector<WindowSequence>& train,
         for (std::int64_t step = 0; step < steps; ++step) {
           torch::Tensor truth;
           const FusionBatch b = DrawCrops(train, o.stage2_batch, k, o, truth);
+          if (o.check_stop) o.check_stop();
           adam.zero_grad();
           MaskedMse(model->forward(b.latents, b.mask), truth, b.mask).backward();
           adam.step();

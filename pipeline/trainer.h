@@ -11,6 +11,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -44,6 +45,9 @@ struct TrainOptions {
   int stage2_min_steps_per_epoch = 20;
   double modality_dropout = 0.2;  // P(a modality is missing for a whole crop)
   double window_dropout = 0.1;    // P(a modality is missing in one window)
+  // Called before every optimisation step; may throw to stop training
+  // (the CLI's Ctrl-C). Empty: never stops.
+  std::function<void()> check_stop;
   // Edge network sizes (paper silent; DESIGN.md: d_state 16, d_conv 4, expand 2).
   int d_model = 64;
   int layers = 2;

@@ -165,6 +165,10 @@ void InstallInterruptHandlers() {
   sigaction(SIGTERM, &sa, nullptr);
 }
 
+void ThrowIfInterrupted() {
+  if (g_interrupt) throw Interrupted();
+}
+
 RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
   const auto wall_start = std::chrono::steady_clock::now();
   const std::string started_utc = UtcNow();

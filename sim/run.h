@@ -52,4 +52,8 @@ struct Interrupted : std::runtime_error {
 // Installs SIGINT/SIGTERM handlers that ask a running simulation to stop.
 void InstallInterruptHandlers();
 
+// Throws Interrupted if a termination signal has arrived (for long work
+// outside the run loop, such as training).
+void ThrowIfInterrupted();
+
 }  // namespace uavsim::sim

@@ -176,6 +176,7 @@ pipeline::TrainReport RunTraining(const Scenario& base, const TrainCommand& c) {
   pipeline::TrainOptions t;
   t.seed = c.seed;
   t.quiet = c.quiet;
+  t.check_stop = ThrowIfInterrupted;
   t.latent_dim = base.pipeline.latent_dim;
   t.window_s = base.pipeline.window_s;
   if (c.quick) {

@@ -1,9 +1,16 @@
 // `uavsim train` end to end, the learned pipeline in the run loop, and the
 // shipped default model on held-out trajectories.
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <catch2/catch.hpp>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <set>
+#include <thread>
 
 #include "pipeline/model_bundle.h"
 #include "pipeline/torch_runtime.h"
@@ -172,4 +179,31 @@ TEST_CASE("The default model: three modalities beat each single one on held-out 
     INFO(single << " " << ev.rmse_m.at(single) << " m, all " << ev.rmse_m.at("all") << " m");
     CHECK(ev.rmse_m.at("all") < ev.rmse_m.at(single));
   }
+}
+
+TEST_CASE("CLI: an interrupted training leaves no model and no episode file", "[sim][train]") {
+  const std::string dir = TempDir("train-interrupted");
+  const std::string out = dir + "/model", data = dir + "/episodes.bin";
+  const pid_t pid = fork();
+  if (pid == 0) {
+    const int devnull = open("/dev/null", O_WRONLY);
+    dup2(devnull, 1), dup2(devnull, 2);
+    execl(UAVSIM_CLI, UAVSIM_CLI, "train", kDefault.c_str(), "--quick", "--out", out.c_str(),
+          "--data", data.c_str(), "--quiet", static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  // Wait until the model's staging folder exists (simulation under way).
+  bool started = false;
+  for (int i = 0; i < 400 && !started; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(25));
+    for (auto& e : fs::directory_iterator(dir))
+      started = started || e.path().filename().string().rfind(".model.partial-", 0) == 0;
+  }
+  REQUIRE(started);
+  kill(pid, SIGINT);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  REQUIRE(WIFEXITED(status));
+  CHECK(WEXITSTATUS(status) == 130);
+  CHECK(fs::is_empty(dir));  // no model, no staging, no episode file
 }
