@@ -161,6 +161,7 @@ IbCcModel TrainEncoder(Modality m, const Dataset& data, const TrainOptions& o,
   config.latent_dim = o.latent_dim;
   config.dropout = o.dropout;
   config.beta = o.beta;
+  config.bottleneck = o.bottleneck;
   config.normalization = norm;
   IbCcModel model(config);
   std::vector<const Sample*> train = SamplesOf(data.train, m);
@@ -526,6 +527,7 @@ std::string ReportJson(const TrainReport& r, const TrainOptions& o) {
   core::Json j = core::Json::object();
   j["seed"] = o.seed;
   j["latent_dim"] = o.latent_dim;
+  j["bottleneck"] = o.bottleneck == IbBottleneck::kIb ? "ib" : "mlp";
   j["learning_rate"] = {{"stage1", o.stage1_lr}, {"stage2", o.stage2_lr}};
   core::Json stages = core::Json::array();
   for (const StageReport& s : r.stages)

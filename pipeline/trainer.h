@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "pipeline/dataset.h"
+#include "pipeline/ib_cc_config.h"
 #include "pipeline/model_bundle.h"
 
 namespace uavsim::pipeline {
@@ -28,6 +29,9 @@ struct TrainOptions {
   double window_s = 0.2;
   double dropout = 0.1;  // paper Sec. VI
   double beta = 1e-3;    // paper Sec. VI
+  // The node's compressor: the paper's IB head, or its MLP baseline of equal
+  // depth and parameter count (the Sec. VI ablation).
+  IbBottleneck bottleneck = IbBottleneck::kIb;
   // Stage 1 (per modality).
   double stage1_lr = 1e-3;
   int stage1_batch = 32;

@@ -92,8 +92,8 @@ const char* kSweepHelp =
 
 const char* kTrainHelp =
     "usage: uavsim train SCENARIO.json [--out MODEL] [--quick] [--seed N] [--episodes N]\n"
-    "                    [--episode-s S] [--lr RATE] [--threads N] [--data FILE]\n"
-    "                    [--set /ptr=value] [--force] [--quiet]\n"
+    "                    [--episode-s S] [--lr RATE] [--bottleneck ib|mlp] [--threads N]\n"
+    "                    [--data FILE] [--set /ptr=value] [--force] [--quiet]\n"
     "\n"
     "Generates training data by simulation and trains the UAVLoc model with LibTorch on\n"
     "the CPU. Each episode is the scenario with its own target trajectory (orbit,\n"
@@ -110,6 +110,8 @@ const char* kTrainHelp =
     "  --episode-s S  simulated seconds each (default 20)\n"
     "  --seed N       seeds the episodes, the split and the weights (default 1)\n"
     "  --lr RATE      Adam's learning rate for both stages (default 1e-3; see NOTES.md)\n"
+    "  --bottleneck B ib (default: the paper's IB-CC head, mu/sigma and KL) or mlp (its\n"
+    "                 MLP baseline of equal depth and parameter count, no KL)\n"
     "  --threads N    LibTorch threads (default 1); results depend on it\n"
     "  --data FILE    the simulated episodes: read FILE if it exists (no simulation),\n"
     "                 else simulate and write it (train again without simulating)\n"
@@ -272,10 +274,10 @@ std::uint64_t UnsignedOption(const std::string& cmd, const std::string& name, co
 }
 
 int Train(int argc, char** argv) {
-  const ParsedArgs a = Parse(
-      "train", argc, argv, 2,
-      {"--out", "--seed", "--episodes", "--episode-s", "--threads", "--set", "--data", "--lr"},
-      {"--quick", "--quiet", "--force", "--help"});
+  const ParsedArgs a = Parse("train", argc, argv, 2,
+                             {"--out", "--seed", "--episodes", "--episode-s", "--threads", "--set",
+                              "--data", "--lr", "--bottleneck"},
+                             {"--quick", "--quiet", "--force", "--help"});
   if (a.Has("--help")) return std::cout << kTrainHelp, kExitOk;
   const std::string& file = OneScenario("train", a);
   uavsim::sim::TrainCommand c;
@@ -295,6 +297,11 @@ int Train(int argc, char** argv) {
     if (v->empty() || *end != '\0' || !(c.episode_s >= 1.0 && c.episode_s <= 3600.0))
       throw UsageError("uavsim train: --episode-s expects seconds from 1 to 3600, got '" + *v +
                        "'");
+  }
+  if (auto v = a.Value("--bottleneck")) {
+    if (*v != "ib" && *v != "mlp")
+      throw UsageError("uavsim train: --bottleneck expects ib or mlp, got '" + *v + "'");
+    c.mlp_bottleneck = *v == "mlp";
   }
   if (auto v = a.Value("--lr")) {
     char* end = nullptr;

@@ -194,6 +194,7 @@ pipeline::TrainReport RunTraining(const Scenario& base, const TrainCommand& c) {
     t.stage2_sequence_windows = 30;
   }
   if (c.learning_rate > 0) t.stage1_lr = t.stage2_lr = c.learning_rate;
+  if (c.mlp_bottleneck) t.bottleneck = pipeline::IbBottleneck::kMlp;
   if (c.episodes > 0) plan.episodes = c.episodes;
   if (c.episode_s > 0) plan.episode_s = c.episode_s;
 

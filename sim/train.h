@@ -48,10 +48,11 @@ struct TrainCommand {
   bool quick = false;
   bool quiet = false;
   std::uint64_t seed = 1;
-  int episodes = 0;            // 0: the default for quick / full
-  double episode_s = 0.0;      // 0: the default for quick / full
-  double learning_rate = 0.0;  // 0: the trainer's default
-  int threads = 1;             // LibTorch intra-op threads (see NOTES.md: 1 is fastest here)
+  int episodes = 0;             // 0: the default for quick / full
+  double episode_s = 0.0;       // 0: the default for quick / full
+  double learning_rate = 0.0;   // 0: the trainer's default
+  bool mlp_bottleneck = false;  // the paper's MLP baseline instead of the IB head
+  int threads = 1;              // LibTorch intra-op threads (see NOTES.md: 1 is fastest here)
   // Episode file: read if it exists (no simulation), else written after
   // simulating. Empty: simulate, keep nothing.
   std::string data_file;

@@ -102,6 +102,9 @@ TEST_CASE("CLI: train and run refuse what they cannot use, naming it", "[sim][tr
   CHECK_THAT(few.err, Catch::Contains("--episodes"));
   auto threads = RunCli({"train", kDefault, "--threads", "x", "--out", dir + "/m"});
   CHECK(threads.exit_code == 2);
+  auto bottleneck = RunCli({"train", kDefault, "--bottleneck", "cnn", "--out", dir + "/m"});
+  CHECK(bottleneck.exit_code == 2);
+  CHECK_THAT(bottleneck.err, Catch::Contains("--bottleneck"));
   CHECK_FALSE(fs::exists(dir + "/m"));
 
   auto missing = RunCli({"run", kDefault, "--out", dir + "/r", "--quiet", "--set",
