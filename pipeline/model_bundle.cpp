@@ -118,6 +118,7 @@ std::unique_ptr<UavLocModelFiles> UavLocModelFiles::Load(const std::string& path
     files->encoders_[static_cast<int>(modality)] = std::move(enc);
   }
   const std::string edge = require(m.edge, "edge");
+  files->edge_path_ = edge;
   files->edge_ = EdgeLocalizer::Load(edge);
   if (files->edge_->latent_dim() != m.latent_dim)
     throw core::ConfigError(edge + ".json", "/latent_dim",
@@ -125,6 +126,10 @@ std::unique_ptr<UavLocModelFiles> UavLocModelFiles::Load(const std::string& path
                                 files->manifest_path_ + ", got " +
                                 std::to_string(files->edge_->latent_dim()));
   return files;
+}
+
+std::unique_ptr<EdgeLocalizer> UavLocModelFiles::LoadEdge() const {
+  return EdgeLocalizer::Load(edge_path_);
 }
 
 }  // namespace uavsim::pipeline

@@ -61,12 +61,16 @@ class UavLocModelFiles {
   const std::string& manifest_path() const { return manifest_path_; }
   const NodeEncoder& encoder(Modality m) const { return *encoders_[static_cast<int>(m)]; }
   EdgeLocalizer& edge() { return *edge_; }
+  // Another copy of the edge network with its own track state (for the
+  // single-modality ablations that run beside the fused estimate).
+  std::unique_ptr<EdgeLocalizer> LoadEdge() const;
 
  private:
   ModelManifest manifest_;
   std::string manifest_path_;
   std::unique_ptr<NodeEncoder> encoders_[kModalityCount];
   std::unique_ptr<EdgeLocalizer> edge_;
+  std::string edge_path_;
 };
 
 }  // namespace uavsim::pipeline

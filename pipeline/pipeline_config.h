@@ -15,6 +15,9 @@ struct PipelineConfig {
   double window_s = 0.2;          // paper: alignment window t^w = 0.2 s
   int latent_dim = 16;            // paper: z in {4, 8, 16, 32, 64}
   double late_allowance_s = 0.0;  // grace after a window's deadline before a packet counts late
+  // uavloc: the fused three-modality estimate; ekf: the classical baseline;
+  // uavloc_camera / _lidar / _radar: the same trained network fed only that
+  // modality's latents (the paper's single-modality comparison).
   std::vector<std::string> methods{"uavloc", "ekf"};
   PreprocessConfig preprocess;  // the sensing nodes' pre-processing (paper Sec. IV-A)
   EkfConfig ekf;                // the classical baseline

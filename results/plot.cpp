@@ -74,7 +74,7 @@ std::string Shortest(double x) {
 
 struct Series {
   std::string name;
-  std::string points;  // "x y\n" lines
+  std::string points;  // "x y\n" lines ("x y half-width\n" with error bars)
 };
 
 // Runs argv (no shell) with stdin from /dev/null and stdout+stderr captured.
@@ -168,6 +168,8 @@ std::string PlotCsv(const std::string& csv_path, const PlotSpec& spec) {
   if (xc < 0) return where + "no column \"" + spec.x_column + "\"";
   if (yc < 0) return where + "no column \"" + spec.y_column + "\"";
   if (gc == -1) return where + "no column \"" + spec.group_column + "\"";
+  const long ebc = spec.y_error_column.empty() ? -2 : column(spec.y_error_column);
+  if (ebc == -1) return where + "no column \"" + spec.y_error_column + "\"";
 
   std::vector<Series> series;
   std::size_t row = 1;
@@ -179,10 +181,19 @@ std::string PlotCsv(const std::string& csv_path, const PlotSpec& spec) {
     if (cells.size() != header.size())
       return where + "line " + std::to_string(row) + " has " + std::to_string(cells.size()) +
              " cells, the header " + std::to_string(header.size());
-    double x = 0.0, y = 0.0;
-    if (!ParseNumber(cells[xc], &x) || !ParseNumber(cells[yc], &y))
-      return where + "line " + std::to_string(row) + ": expected finite numbers in \"" +
-             spec.x_column + "\" and \"" + spec.y_column + "\"";
+    const std::string at = where + "line " + std::to_string(row) + ": ";
+    double x = 0.0, y = 0.0, half_width = 0.0;
+    const bool y_missing = spec.skip_empty_y && cells[yc].empty();
+    if (!ParseNumber(cells[xc], &x) || (!y_missing && !ParseNumber(cells[yc], &y)))
+      return at + "expected finite numbers in \"" + spec.x_column + "\" and \"" + spec.y_column +
+             "\"";
+    if (spec.log_x && x <= 0.0) return at + "x must be > 0 on a logarithmic axis";
+    if (spec.log_y && !y_missing && y <= 0.0) return at + "y must be > 0 on a logarithmic axis";
+    if (ebc >= 0 && !cells[ebc].empty() &&
+        (!ParseNumber(cells[ebc], &half_width) || half_width < 0))
+      return at + "expected an empty cell or a finite number >= 0 in \"" + spec.y_error_column +
+             "\"";
+    if (y_missing) continue;
     const std::string group = gc >= 0 ? cells[gc] : spec.y_column;
     Series* s = nullptr;
     for (auto& candidate : series)
@@ -191,7 +202,9 @@ std::string PlotCsv(const std::string& csv_path, const PlotSpec& spec) {
       series.push_back({group, ""});
       s = &series.back();
     }
-    s->points += Shortest(x) + " " + Shortest(y) + "\n";
+    s->points += Shortest(x) + " " + Shortest(y);
+    if (ebc >= 0) s->points += " " + Shortest(half_width);
+    s->points += "\n";
   }
   if (series.empty()) return where + "no data rows";
 
@@ -222,13 +235,19 @@ std::string PlotCsv(const std::string& csv_path, const PlotSpec& spec) {
      << "set xlabel uavsim_xlabel\n"
      << "set ylabel uavsim_ylabel\n"
      << "set grid\n"
-     << "set key top left\n";
+     << (spec.key_below ? "set key below\n" : "set key top left\n");
+  if (spec.log_x) gp << "set logscale x\n";
+  if (spec.log_y) gp << "set logscale y\n";
+  if (spec.y_min_zero && !spec.log_y) gp << "set yrange [0:*]\n";
+  // Error bars at the ends of the x range would be drawn on the border.
+  if (ebc >= 0) gp << "set offsets graph 0.03, graph 0.03, 0, 0\n";
   for (std::size_t i = 0; i < series.size(); ++i)
     gp << "$g" << i << " << EOD\n" << series[i].points << "EOD\n";
   gp << "plot ";
   for (std::size_t i = 0; i < series.size(); ++i)
-    gp << (i ? ", \\\n     " : "") << "$g" << i << " using 1:2 with linespoints title uavsim_line"
-       << i;
+    gp << (i ? ", \\\n     " : "") << "$g" << i
+       << (ebc >= 0 ? " using 1:2:3 with yerrorlines" : " using 1:2 with linespoints")
+       << " title uavsim_line" << i;
   gp << "\nunset output\n";
 
   std::string script_path = (fs::temp_directory_path() / "uavsim-plot-XXXXXX.gp").string();

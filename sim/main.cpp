@@ -24,6 +24,8 @@
 #include "sim/core/error.h"
 #include "sim/run.h"
 #include "sim/scenario.h"
+#include "sim/sweep.h"
+#include "sim/sweep_spec.h"
 #include "sim/train.h"
 #include "sim/version.h"
 
@@ -85,10 +87,26 @@ const char* kRunHelp =
 
 const char* kSweepHelp =
     "usage: uavsim sweep SPEC.json [--out DIR] [--jobs N] [--shard I/N] [--quiet]\n"
-    "       uavsim sweep merge DIR\n"
+    "       uavsim sweep merge DIR [--quiet]\n"
+    "       mpirun -np K uavsim sweep SPEC.json [--out DIR] [--jobs N]\n"
     "\n"
-    "Runs the Cartesian grid of scenario variations in SPEC.json (packet loss, weather,\n"
-    "seeds), resumably, in parallel or under mpirun, and aggregates RMSE and rate curves.\n";
+    "Runs the Cartesian grid of scenario variations in SPEC.json (parameters as JSON\n"
+    "pointers into a base scenario with lists, ranges or named cases of values, times\n"
+    "the seeds), each point a run directory DIR/points/<id>/ (default DIR: runs/NAME).\n"
+    "Every point is checked before anything runs. Rerunning the same command resumes:\n"
+    "finished points are kept, killed ones redone. When all points are done, DIR gets\n"
+    "summary.csv (a row per point), aggregate.csv (mean and 95 % confidence interval over\n"
+    "the seeds) and plots/ (RMSE and delivery vs each numeric parameter, rate vs SNR per\n"
+    "setting). The spec format is in scenarios/sweeps/README.md.\n"
+    "\n"
+    "  --out DIR     the sweep folder (default runs/NAME)\n"
+    "  --jobs N      points at a time (default 1; each gets cores / N threads); under\n"
+    "                mpirun, per rank: rank 0 hands points to ranks as they free up\n"
+    "  --shard I/N   run only the points whose index is I modulo N (0 <= I < N), e.g. a\n"
+    "                Slurm array task; then `uavsim sweep merge DIR` writes the tables\n"
+    "  --quiet       no progress or summary output\n"
+    "exit codes: 0 all points done, 1 some points failed (rerun to retry them), 2 bad\n"
+    "input, 130 interrupted (finished points are kept)\n";
 
 const char* kTrainHelp =
     "usage: uavsim train SCENARIO.json [--out MODEL] [--quick] [--seed N] [--episodes N]\n"
@@ -332,12 +350,62 @@ int Train(int argc, char** argv) {
   return kExitOk;
 }
 
-int NotYet(const std::string& cmd, const char* help, const char* issue, int argc, char** argv) {
-  for (int i = 2; i < argc; ++i)
-    if (std::string(argv[i]) == "--help") return std::cout << help, kExitOk;
-  std::cerr << "uavsim " << cmd << ": not available yet (it arrives with the issue \"" << issue
-            << "\")\n";
-  return kExitBadInput;
+void PrintSweepOutcome(const std::string& dir, const uavsim::sim::SweepOutcome& r) {
+  std::printf("%s: %zu points: %zu run now, %zu already done, %zu failed", dir.c_str(), r.points,
+              r.ran, r.already_done, r.failed);
+  if (r.missing > 0) std::printf(", %zu left to other shards", r.missing);
+  std::printf("\n");
+  if (r.reported)
+    std::printf("%s/summary.csv, %s/aggregate.csv and %s/plots/ written\n", dir.c_str(),
+                dir.c_str(), dir.c_str());
+  else if (r.missing > 0 && r.failed == 0)
+    std::printf("when every shard is done: uavsim sweep merge %s\n", dir.c_str());
+}
+
+int Sweep(int argc, char** argv) {
+  const ParsedArgs a =
+      Parse("sweep", argc, argv, 2, {"--out", "--jobs", "--shard"}, {"--quiet", "--help"});
+  if (a.Has("--help")) return std::cout << kSweepHelp, kExitOk;
+  const bool quiet = a.Has("--quiet");
+  if (!a.positional.empty() && a.positional[0] == "merge") {
+    if (a.positional.size() != 2 || a.Has("--out") || a.Has("--jobs") || a.Has("--shard"))
+      throw UsageError("uavsim sweep merge: expected one sweep folder (see uavsim sweep --help)");
+    const auto r = uavsim::sim::MergeSweep(a.positional[1]);
+    for (const std::string& w : r.warnings) std::cerr << "uavsim: warning: " << w << "\n";
+    if (!quiet) PrintSweepOutcome(a.positional[1], r);
+    return kExitOk;
+  }
+  if (a.positional.size() != 1)
+    throw UsageError("uavsim sweep: expected one sweep spec file (see uavsim sweep --help)");
+  uavsim::sim::SweepOptions o;
+  o.quiet = quiet;
+  if (auto v = a.Value("--jobs"))
+    o.jobs = static_cast<int>(UnsignedOption("sweep", "--jobs", *v, 1024));
+  if (o.jobs < 1) throw UsageError("uavsim sweep: --jobs needs at least 1");
+  if (auto v = a.Value("--shard")) {
+    const auto slash = v->find('/');
+    const std::string i = slash == std::string::npos ? *v : v->substr(0, slash);
+    const std::string n = slash == std::string::npos ? "" : v->substr(slash + 1);
+    if (slash == std::string::npos || i.empty() || n.empty() ||
+        i.find_first_not_of("0123456789") != std::string::npos ||
+        n.find_first_not_of("0123456789") != std::string::npos || i.size() > 6 || n.size() > 6 ||
+        std::stoi(n) < 1 || std::stoi(i) >= std::stoi(n))
+      throw UsageError("uavsim sweep: --shard expects I/N with 0 <= I < N, got '" + *v + "'");
+    o.shard_index = std::stoi(i);
+    o.shard_count = std::stoi(n);
+  }
+  const uavsim::sim::SweepSpec spec = uavsim::sim::LoadSweepSpec(a.positional[0]);
+  o.out_dir = a.Value("--out").value_or("runs/" + spec.name);
+  const auto r = uavsim::sim::RunSweep(spec, o);
+  if (r.mpi_worker) return r.failed ? kExitFailure : kExitOk;
+  for (const std::string& w : r.warnings) std::cerr << "uavsim: warning: " << w << "\n";
+  if (!quiet) PrintSweepOutcome(o.out_dir, r);
+  if (r.failed) {
+    std::cerr << "uavsim sweep: " << r.failed << " of " << r.points
+              << " points failed (messages above); rerun the same command to retry them\n";
+    return kExitFailure;
+  }
+  return kExitOk;
 }
 
 int Bench(int argc, char** argv) {
@@ -385,7 +453,7 @@ int Main(int argc, char** argv) {
   if (cmd == "validate") return Validate(argc, argv);
   if (cmd == "run") return Run(argc, argv);
   if (cmd == "bench") return Bench(argc, argv);
-  if (cmd == "sweep") return NotYet(cmd, kSweepHelp, "Sweeps and curves", argc, argv);
+  if (cmd == "sweep") return Sweep(argc, argv);
   if (cmd == "train") return Train(argc, argv);
   throw UsageError("uavsim: unknown command '" + cmd + "' (see uavsim --help)");
 }
@@ -403,7 +471,7 @@ int main(int argc, char** argv) {
     std::cerr << e.what() << "\n";
     return kExitBadInput;
   } catch (const uavsim::sim::Interrupted&) {
-    std::cerr << "uavsim: interrupted; nothing was written under the final name\n";
+    std::cerr << "uavsim: interrupted; nothing half-written is left under a final name\n";
     return kExitInterrupted;
   } catch (const std::bad_alloc&) {
     std::cerr << "uavsim: out of memory\n";

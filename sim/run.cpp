@@ -169,6 +169,8 @@ void ThrowIfInterrupted() {
   if (g_interrupt) throw Interrupted();
 }
 
+bool InterruptRequested() { return g_interrupt != 0; }
+
 RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
   const auto wall_start = std::chrono::steady_clock::now();
   const std::string started_utc = UtcNow();
@@ -231,9 +233,18 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
   // edge network at each window deadline on the latents that arrived in time.
   std::unique_ptr<pipeline::UavLocModelFiles> uavloc;
   core::Json model_info;
-  if (runs("uavloc") && !o.collect) {
+  // Single-modality ablations: the same network on one modality's latents,
+  // each with its own track state.
+  std::map<std::string, std::pair<channel::Modality, std::unique_ptr<pipeline::EdgeLocalizer>>>
+      ablations;
+  const bool any_uavloc =
+      runs("uavloc") || runs("uavloc_camera") || runs("uavloc_lidar") || runs("uavloc_radar");
+  if (any_uavloc && !o.collect) {
     pipeline::InitTorch(1, s.seed);
     uavloc = LoadModel(s, o.scenario_file, o.quiet, model_info);
+    for (const char* m : kModalities)
+      if (const std::string method = std::string("uavloc_") + m; runs(method.c_str()))
+        ablations[method] = {*channel::ModalityFromName(m), uavloc->LoadEdge()};
   }
   const core::SimTime window_ns = core::Seconds(s.pipeline.window_s);
   std::map<std::int64_t, pipeline::WindowInputs> pending;  // window k -> latents arrived
@@ -397,7 +408,7 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
   const double rain_db_per_km = channel::RainSpecificAttenuationDbPerKm(
       s.base_station.carrier_ghz, s.weather.rain_mm_h, channel::Polarization::kVertical, 0.0);
   std::vector<std::string> steered;
-  if (uavloc) steered.push_back("uavloc");
+  if (uavloc && runs("uavloc")) steered.push_back("uavloc");
   if (ekf) steered.push_back("ekf");
   channel::DownlinkScorer downlink(
       s.base_station, rain_db_per_km, steered,
@@ -406,6 +417,7 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
   results::CsvTable estimates({"t_s", "method", "x_m", "y_m", "z_m"});
   std::map<std::string, RmseAccumulator> rmse;
   const core::SimTime allowance = core::Seconds(s.pipeline.late_allowance_s);
+  std::uint64_t windows = 0;  // deadlines the edge estimated at
   core::PeriodicProcess window_timer(
       1.0 / s.pipeline.window_s, s.pipeline.window_s + s.pipeline.late_allowance_s,
       [&](std::int64_t tick, core::SimTime t_deadline) {
@@ -415,6 +427,7 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
           if (t_deadline - allowance <= t_end) o.collect->window_truth.push_back(truth_m);
           return;
         }
+        ++windows;
         std::map<std::string, Eigen::Vector3d> estimated;
         if (uavloc) {
           const std::int64_t k = tick + 1;
@@ -424,7 +437,15 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
           // Windows up to k are done (an arrival stamped exactly at a passed
           // deadline would otherwise linger).
           pending.erase(pending.begin(), pending.upper_bound(k));
-          if (const auto p = uavloc->edge().OnWindow(inputs)) estimated["uavloc"] = *p;
+          for (auto& [method, ablation] : ablations) {
+            pipeline::WindowInputs one;
+            one.window = k;
+            const int m = static_cast<int>(ablation.first);
+            one.frames[m] = inputs.frames[m];
+            if (const auto p = ablation.second->OnWindow(one)) estimated[method] = *p;
+          }
+          if (runs("uavloc"))
+            if (const auto p = uavloc->edge().OnWindow(inputs)) estimated["uavloc"] = *p;
         }
         if (ekf) {
           if (const auto p = ekf->EstimateAt(t_s)) estimated["ekf"] = *p;
@@ -436,7 +457,10 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
           rmse[method].Add(p - truth_m);
         }
         world.scene().SetTime(t_s);
-        downlink.AddWindow(truth_m, estimated, world);
+        std::map<std::string, Eigen::Vector3d> steering;  // the ablations steer no beam
+        for (const std::string& beam : steered)
+          if (auto it = estimated.find(beam); it != estimated.end()) steering.insert(*it);
+        downlink.AddWindow(truth_m, steering, world);
       });
   window_timer.Start(sim, 0, t_end + 1);  // a deadline at exactly t_end still runs
 
@@ -459,8 +483,7 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
   summary.frames = frames;
   summary.wall_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-  if (uavloc) rmse["uavloc"];
-  if (ekf) rmse["ekf"];
+  for (const std::string& method : s.pipeline.methods) rmse[method];
   for (const auto& [method, acc] : rmse)
     summary.rmse_m[method] = acc.count ? std::optional<double>(acc.value()) : std::nullopt;
   if (o.collect) return summary;
@@ -491,6 +514,7 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
     windows_json[method] = acc.count;
   }
   metrics["rmse_m"] = rmse_json;
+  metrics["windows"] = windows;
   metrics["estimated_windows"] = windows_json;
   if (uavloc) metrics["uavloc_model"] = model_info;
   core::Json modalities = core::Json::object();

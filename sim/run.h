@@ -55,5 +55,7 @@ void InstallInterruptHandlers();
 // Throws Interrupted if a termination signal has arrived (for long work
 // outside the run loop, such as training).
 void ThrowIfInterrupted();
+// Whether a termination signal has arrived.
+bool InterruptRequested();
 
 }  // namespace uavsim::sim

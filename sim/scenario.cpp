@@ -235,18 +235,9 @@ void CheckScenario(const Scenario& s, const std::string& file) {
 
 }  // namespace
 
-void ApplyOverride(Json& doc, const std::string& assignment) {
-  const auto eq = assignment.find('=');
-  if (assignment.empty() || assignment[0] != '/' || eq == std::string::npos)
-    throw ConfigError("--set", assignment, "expected /json/pointer=value");
-  const std::string pointer = assignment.substr(0, eq);
-  const std::string text = assignment.substr(eq + 1);
-  Json value;
-  try {
-    value = Json::parse(text);
-  } catch (const Json::exception&) {
-    value = text;  // a bare word such as orbit
-  }
+void SetPointer(Json& doc, const std::string& pointer, const Json& value) {
+  if (pointer.empty() || pointer[0] != '/')
+    throw ConfigError("--set", pointer, "expected a JSON pointer starting with /");
   if (!doc.is_object()) throw ConfigError("--set", pointer, "the scenario is not a JSON object");
   Json* node = &doc;
   std::string at;
@@ -288,6 +279,20 @@ void ApplyOverride(Json& doc, const std::string& assignment) {
     }
     pos = slash + 1;
   }
+}
+
+void ApplyOverride(Json& doc, const std::string& assignment) {
+  const auto eq = assignment.find('=');
+  if (assignment.empty() || assignment[0] != '/' || eq == std::string::npos)
+    throw ConfigError("--set", assignment, "expected /json/pointer=value");
+  const std::string text = assignment.substr(eq + 1);
+  Json value;
+  try {
+    value = Json::parse(text);
+  } catch (const Json::exception&) {
+    value = text;  // a bare word such as orbit
+  }
+  SetPointer(doc, assignment.substr(0, eq), value);
 }
 
 Scenario ScenarioFromJson(const Json& doc, const std::string& file, const std::string& base_dir) {

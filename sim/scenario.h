@@ -107,6 +107,8 @@ constexpr double kMaxFrameBytes = 2.0 * (1ull << 30);
 // as JSON when it is valid JSON, else taken as a string. Missing objects on
 // the way are created; array indices must exist. Throws ConfigError.
 void ApplyOverride(core::Json& doc, const std::string& assignment);
+// The same with the value given as JSON.
+void SetPointer(core::Json& doc, const std::string& pointer, const core::Json& value);
 
 // Loads `path`, applies the overrides, fills the struct and checks every rule
 // including cross-references, referenced files (relative to the scenario's

@@ -67,14 +67,6 @@ TEST_CASE("CLI: usage errors exit 2 with one line", "[sim]") {
   }
 }
 
-TEST_CASE("CLI: later issues' subcommands say they are not available yet", "[sim]") {
-  for (const char* cmd : {"sweep"}) {
-    auto r = RunCli({cmd, kDefault});
-    CHECK(r.exit_code == 2);
-    CHECK_THAT(r.err, Catch::Contains("not available yet"));
-  }
-}
-
 TEST_CASE("CLI: validate accepts the default scenario and {} ", "[sim]") {
   auto r = RunCli({"validate", kDefault});
   CHECK(r.exit_code == 0);

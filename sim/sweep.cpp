@@ -1,0 +1,591 @@
+#include "sim/sweep.h"
+
+#include <sched.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <tbb/global_control.h>
+#include <boost/mpi/communicator.hpp>
+#include <boost/mpi/environment.hpp>
+#include <boost/serialization/string.hpp>
+#include <boost/serialization/utility.hpp>
+#include <boost/serialization/vector.hpp>
+#include <cerrno>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <deque>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <optional>
+#include <set>
+#include <sstream>
+#include <thread>
+
+#include "results/run_directory.h"
+#include "sim/core/error.h"
+#include "sim/core/progress.h"
+#include "sim/run.h"
+
+namespace uavsim::sim {
+namespace {
+
+namespace fs = std::filesystem;
+using core::Json;
+
+constexpr const char* kFormat = "uavsim-sweep/1";
+
+// ---------------------------------------------------------------------------
+// DIR/sweep.json: the expanded grid, what tables and plots need.
+
+Json SweepRecord(const SweepSpec& spec) {
+  Json r = Json::object();
+  r["format"] = kFormat;
+  r["name"] = spec.name;
+  r["spec"] = spec.canonical;
+  Json params = Json::array();
+  for (const results::SweepParameter& p : spec.TableParameters())
+    params.push_back({{"name", p.name}, {"labels", p.labels}});
+  r["parameters"] = params;
+  Json axes = Json::array();
+  for (const results::SweepAxis& a : spec.Axes()) {
+    Json xs = Json::array();
+    for (const auto& [i, x] : a.x_of_value) xs.push_back({i, x});
+    axes.push_back({{"stem", a.stem},
+                    {"x_label", a.x_label},
+                    {"parameter", a.parameter},
+                    {"x_of_value", xs},
+                    {"log_x", a.log_x}});
+  }
+  r["axes"] = axes;
+  Json points = Json::array();
+  for (const SweepPointSpec& p : spec.points)
+    points.push_back({{"id", p.id}, {"values", p.value_index}, {"seed", p.seed}});
+  r["points"] = points;
+  return r;
+}
+
+// The report's inputs from sweep.json (points' metrics read separately).
+results::SweepReportInputs ReportLayout(const Json& r, const std::string& where) {
+  results::SweepReportInputs in;
+  try {
+    in.title = r.at("name").get<std::string>();
+    for (const Json& p : r.at("parameters"))
+      in.parameters.push_back(
+          {p.at("name").get<std::string>(), p.at("labels").get<std::vector<std::string>>()});
+    for (const Json& a : r.at("axes")) {
+      results::SweepAxis axis;
+      axis.stem = a.at("stem").get<std::string>();
+      axis.x_label = a.at("x_label").get<std::string>();
+      axis.parameter = a.at("parameter").get<int>();
+      for (const Json& xv : a.at("x_of_value"))
+        axis.x_of_value.emplace_back(xv.at(0).get<int>(), xv.at(1).get<double>());
+      axis.log_x = a.at("log_x").get<bool>();
+      in.axes.push_back(std::move(axis));
+    }
+    for (const Json& p : r.at("points")) {
+      results::SweepPoint pt;
+      pt.id = p.at("id").get<std::string>();
+      pt.value_index = p.at("values").get<std::vector<int>>();
+      pt.seed = p.at("seed").get<std::uint64_t>();
+      in.points.push_back(std::move(pt));
+    }
+  } catch (const Json::exception& e) {
+    throw core::UsageError(where + ": not a sweep record of this uavsim version (" + e.what() +
+                           ")");
+  }
+  return in;
+}
+
+std::string PointDir(const std::string& dir, const std::string& id) {
+  return (fs::path(dir) / "points" / id).string();
+}
+
+bool PointDone(const std::string& dir, const std::string& id) {
+  std::error_code ec;
+  return fs::is_regular_file(fs::path(PointDir(dir, id)) / "metrics.json", ec);
+}
+
+std::string ReadText(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  if (!in) throw std::runtime_error(p.string() + ": cannot read");
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// Creates DIR (and DIR/points) for `record`, or checks that an existing DIR
+// holds the same sweep.
+void PrepareDir(const std::string& dir, const Json& record) {
+  const fs::path file = fs::path(dir) / "sweep.json";
+  std::error_code ec;
+  if (fs::exists(file, ec)) {
+    Json old;
+    try {
+      old = Json::parse(ReadText(file));
+    } catch (const Json::exception&) {
+      throw core::UsageError(file.string() + ": unreadable; remove " + dir +
+                             " or choose another --out");
+    }
+    if (old != record)
+      throw core::UsageError(dir +
+                             ": holds another sweep (its spec, base scenario or grid differ); "
+                             "choose another --out or remove it");
+    return;
+  }
+  if (fs::exists(dir, ec) && !fs::is_empty(dir, ec))
+    throw core::UsageError(dir + ": exists and is not a sweep; choose another --out");
+  fs::create_directories(fs::path(dir) / "points", ec);
+  if (ec) throw std::runtime_error(dir + ": cannot create folder: " + ec.message());
+  results::WriteFileAtomic(file.string(), record.dump(2) + "\n");
+}
+
+// Whether `pid` is a live process of this host (a zombie is not).
+bool ProcessAlive(pid_t pid) {
+  if (::kill(pid, 0) != 0 && errno == ESRCH) return false;
+  std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
+  std::string line;
+  if (!std::getline(stat, line)) return true;  // no /proc: trust kill()
+  const auto paren = line.rfind(')');
+  return paren == std::string::npos || paren + 2 >= line.size() || line[paren + 2] != 'Z';
+}
+
+// Removes the staging folders ".ID.partial-PID" of points killed mid-way
+// (those whose process is gone), among the points this invocation runs:
+// another shard's points may be in the making on another host.
+void RemoveStalePartials(const std::string& dir, const std::set<std::string>& ours) {
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(fs::path(dir) / "points", ec)) {
+    const std::string name = e.path().filename().string();
+    const auto at = name.find(".partial-");
+    if (name.empty() || name[0] != '.' || at == std::string::npos) continue;
+    if (!ours.count(name.substr(1, at - 1))) continue;
+    const std::string pid_text = name.substr(at + 9);
+    const auto digits = pid_text.substr(0, pid_text.find_first_not_of("0123456789"));
+    if (digits.empty() || digits.size() > 9) continue;
+    const pid_t pid = static_cast<pid_t>(std::stol(digits));
+    if (ProcessAlive(pid)) continue;
+    std::error_code rm;
+    fs::remove_all(e.path(), rm);
+  }
+}
+
+// Cores this process may run on.
+int CoresAvailable() {
+  cpu_set_t set;
+  if (sched_getaffinity(0, sizeof set, &set) == 0) return std::max(1, CPU_COUNT(&set));
+  return std::max(1u, std::thread::hardware_concurrency());
+}
+
+// How many ranks of this job share this host.
+int LocalRanks() {
+  for (const char* v : {"OMPI_COMM_WORLD_LOCAL_SIZE", "MPI_LOCALNRANKS", "PMI_LOCAL_SIZE"})
+    if (const char* s = std::getenv(v)) return std::max(1, std::atoi(s));
+  return 1;
+}
+
+// ---------------------------------------------------------------------------
+// A point runs in a child process (fork, no exec): the child has the point's
+// scenario already checked in memory, runs it with `threads` cores for
+// Embree's TBB pool (LibTorch runs on one thread in every run), and exits.
+
+pid_t LaunchPoint(const SweepPointSpec& point, const std::string& run_dir, int threads,
+                  const std::string& spec_file) {
+  std::fflush(nullptr);
+  const pid_t pid = ::fork();
+  if (pid < 0)
+    throw std::runtime_error(std::string("cannot start a point: fork: ") + std::strerror(errno));
+  if (pid > 0) return pid;
+  int rc = 0;
+  try {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
+                              static_cast<std::size_t>(threads));
+    RunOptions o;
+    o.out_dir = run_dir;
+    o.quiet = true;
+    o.scenario_file = spec_file + "#" + point.id;
+    RunScenario(point.scenario, o);
+  } catch (const Interrupted&) {
+    rc = 130;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "uavsim sweep: point %s: %s\n", point.id.c_str(), e.what());
+    rc = 1;
+  }
+  std::fflush(nullptr);
+  ::_exit(rc);
+}
+
+// Children of this process, point index by pid.
+class ChildPool {
+ public:
+  explicit ChildPool(int slots) : slots_(slots) {}
+  ~ChildPool() { KillAll(); }
+  bool HasSlot() const { return static_cast<int>(running_.size()) < slots_; }
+  bool empty() const { return running_.empty(); }
+  void Add(pid_t pid, std::size_t point) { running_[pid] = point; }
+  // A finished child: (point, exit code), without blocking.
+  std::optional<std::pair<std::size_t, int>> Reap() {
+    for (auto it = running_.begin(); it != running_.end(); ++it) {
+      int status = 0;
+      const pid_t r = ::waitpid(it->first, &status, WNOHANG);
+      if (r == 0) continue;
+      const std::size_t point = it->second;
+      running_.erase(it);
+      const int rc = r < 0 ? 1 : WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+      return std::make_pair(point, rc);
+    }
+    return std::nullopt;
+  }
+  // Asks every child to stop (they discard their staging folders) and waits.
+  void KillAll() {
+    for (const auto& [pid, point] : running_) ::kill(pid, SIGTERM);
+    for (const auto& [pid, point] : running_) {
+      int status = 0;
+      while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+      }
+    }
+    running_.clear();
+  }
+
+ private:
+  int slots_;
+  std::map<pid_t, std::size_t> running_;
+};
+
+void Nap() { std::this_thread::sleep_for(std::chrono::milliseconds(10)); }
+
+// Points this invocation should run: its shard, not yet done.
+std::deque<std::size_t> PointsToRun(const SweepSpec& spec, const SweepOptions& o,
+                                    SweepOutcome& out) {
+  std::deque<std::size_t> todo;
+  for (std::size_t i = 0; i < spec.points.size(); ++i) {
+    if (PointDone(o.out_dir, spec.points[i].id)) {
+      ++out.already_done;
+      continue;
+    }
+    if (static_cast<int>(i % static_cast<std::size_t>(o.shard_count)) == o.shard_index)
+      todo.push_back(i);
+  }
+  return todo;
+}
+
+// The ids of this invocation's shard.
+std::set<std::string> ShardIds(const SweepSpec& spec, const SweepOptions& o) {
+  std::set<std::string> ids;
+  for (std::size_t i = 0; i < spec.points.size(); ++i)
+    if (static_cast<int>(i % static_cast<std::size_t>(o.shard_count)) == o.shard_index)
+      ids.insert(spec.points[i].id);
+  return ids;
+}
+
+int ThreadsPerPoint(int jobs) { return std::max(1, CoresAvailable() / (LocalRanks() * jobs)); }
+
+// ---------------------------------------------------------------------------
+// Local execution.
+
+void RunLocal(const SweepSpec& spec, const SweepOptions& o, std::deque<std::size_t> todo,
+              SweepOutcome& out) {
+  core::Progress progress("sweep " + spec.name, static_cast<double>(todo.size()), "points",
+                          o.quiet);
+  const int threads = ThreadsPerPoint(o.jobs);
+  ChildPool pool(o.jobs);
+  std::size_t finished = 0;
+  while (!todo.empty() || !pool.empty()) {
+    if (InterruptRequested()) {
+      pool.KillAll();
+      throw Interrupted();
+    }
+    bool busy = false;
+    while (pool.HasSlot() && !todo.empty()) {
+      const std::size_t i = todo.front();
+      todo.pop_front();
+      pool.Add(
+          LaunchPoint(spec.points[i], PointDir(o.out_dir, spec.points[i].id), threads, spec.file),
+          i);
+      busy = true;
+    }
+    while (const auto done = pool.Reap()) {
+      busy = true;
+      if (done->second == 130 || InterruptRequested()) {
+        pool.KillAll();
+        throw Interrupted();
+      }
+      ++finished;
+      done->second == 0 ? ++out.ran : ++out.failed;
+      progress.Update(static_cast<double>(finished));
+    }
+    if (!busy) Nap();
+  }
+  progress.Finish();
+}
+
+// ---------------------------------------------------------------------------
+// Distributed execution (Boost.MPI). Messages:
+//   worker -> 0  kRequest  (nothing)        a free slot
+//   0 -> worker  kAssign   point index, or -1: no more points
+//   worker -> 0  kResult   PointFiles       a point's outcome and files
+
+enum Tag { kRequest = 1, kAssign = 2, kResult = 3 };
+
+struct PointFiles {
+  long long point = -1;
+  int rc = 0;
+  std::vector<std::pair<std::string, std::string>> files;  // relative path -> bytes
+
+  template <class Archive>
+  void serialize(Archive& ar, unsigned) {
+    ar& point& rc& files;
+  }
+};
+
+std::vector<std::pair<std::string, std::string>> ReadTree(const fs::path& root) {
+  std::vector<std::pair<std::string, std::string>> files;
+  for (const auto& e : fs::recursive_directory_iterator(root))
+    if (e.is_regular_file())
+      files.emplace_back(fs::relative(e.path(), root).string(), ReadText(e.path()));
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+// Rank 0 writes a worker's point all-or-nothing, as a run would.
+void CommitPoint(const std::string& dir, const std::string& id,
+                 const std::vector<std::pair<std::string, std::string>>& files) {
+  results::RunDirectory run(PointDir(dir, id), false);
+  for (const auto& [path, bytes] : files) run.WriteText(path, bytes);
+  run.Commit();
+}
+
+void RunCoordinator(boost::mpi::communicator& world, const SweepSpec& spec, const SweepOptions& o,
+                    std::deque<std::size_t> todo, SweepOutcome& out) {
+  core::Progress progress("sweep " + spec.name + " (" + std::to_string(world.size()) + " ranks)",
+                          static_cast<double>(todo.size()), "points", o.quiet);
+  const int threads = ThreadsPerPoint(o.jobs);
+  ChildPool pool(o.jobs);
+  int workers = world.size() - 1;  // not yet told to stop
+  std::size_t remote = 0, finished = 0;
+  const auto count = [&](int rc) {
+    ++finished;
+    rc == 0 ? ++out.ran : ++out.failed;
+    progress.Update(static_cast<double>(finished));
+  };
+  while (!todo.empty() || !pool.empty() || workers > 0 || remote > 0) {
+    if (InterruptRequested()) {
+      pool.KillAll();
+      throw Interrupted();
+    }
+    bool busy = false;
+    while (auto st = world.iprobe(boost::mpi::any_source, kRequest)) {
+      world.recv(st->source(), kRequest);
+      long long assign = -1;
+      if (!todo.empty()) {
+        assign = static_cast<long long>(todo.front());
+        todo.pop_front();
+        ++remote;
+      } else {
+        --workers;
+      }
+      world.send(st->source(), kAssign, assign);
+      busy = true;
+    }
+    while (auto st = world.iprobe(boost::mpi::any_source, kResult)) {
+      PointFiles r;
+      world.recv(st->source(), kResult, r);
+      --remote;
+      const std::string& id = spec.points.at(static_cast<std::size_t>(r.point)).id;
+      if (r.rc == 0) CommitPoint(o.out_dir, id, r.files);
+      count(r.rc);
+      busy = true;
+    }
+    // Rank 0's own slots; a point is handed to a worker first when both wait.
+    while (pool.HasSlot() && !todo.empty()) {
+      const std::size_t i = todo.front();
+      todo.pop_front();
+      pool.Add(
+          LaunchPoint(spec.points[i], PointDir(o.out_dir, spec.points[i].id), threads, spec.file),
+          i);
+      busy = true;
+    }
+    while (const auto done = pool.Reap()) {
+      count(done->second);
+      busy = true;
+    }
+    if (!busy) Nap();
+  }
+  progress.Finish();
+}
+
+void RunWorker(boost::mpi::communicator& world, const SweepSpec& spec, const SweepOptions& o,
+               SweepOutcome& out) {
+  char tmpl[] = "/tmp/uavsim-sweep-rank-XXXXXX";
+  if (!::mkdtemp(tmpl)) throw std::runtime_error("cannot create a temporary folder in /tmp");
+  const fs::path scratch(tmpl);
+  struct Cleanup {
+    fs::path p;
+    ~Cleanup() {
+      std::error_code ec;
+      fs::remove_all(p, ec);
+    }
+  } cleanup{scratch};
+  const int threads = ThreadsPerPoint(o.jobs);
+  ChildPool pool(o.jobs);
+  bool asked = false, stopped = false;
+  while (!stopped || !pool.empty()) {
+    if (InterruptRequested()) {
+      pool.KillAll();
+      throw Interrupted();
+    }
+    bool busy = false;
+    if (!stopped && !asked && pool.HasSlot()) {
+      world.send(0, kRequest);
+      asked = true;
+    }
+    if (asked && world.iprobe(0, kAssign)) {
+      long long i = -1;
+      world.recv(0, kAssign, i);
+      asked = false;
+      busy = true;
+      if (i < 0) {
+        stopped = true;
+      } else {
+        const SweepPointSpec& p = spec.points.at(static_cast<std::size_t>(i));
+        pool.Add(LaunchPoint(p, (scratch / p.id).string(), threads, spec.file),
+                 static_cast<std::size_t>(i));
+      }
+    }
+    while (const auto done = pool.Reap()) {
+      PointFiles r;
+      r.point = static_cast<long long>(done->first);
+      r.rc = done->second;
+      const fs::path run = scratch / spec.points[done->first].id;
+      if (r.rc == 0) r.files = ReadTree(run);
+      std::error_code ec;
+      fs::remove_all(run, ec);
+      world.send(0, kResult, r);
+      r.rc == 0 ? ++out.ran : ++out.failed;
+      busy = true;
+    }
+    if (!busy) Nap();
+  }
+}
+
+}  // namespace
+
+bool UnderMpirun() {
+  for (const char* v : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_RANK"})
+    if (std::getenv(v)) return true;
+  return false;
+}
+
+SweepOutcome MergeSweep(const std::string& dir) {
+  const fs::path file = fs::path(dir) / "sweep.json";
+  std::error_code ec;
+  if (!fs::is_regular_file(file, ec))
+    throw core::UsageError(dir + ": not a sweep folder (no sweep.json)");
+  Json record;
+  try {
+    record = Json::parse(ReadText(file));
+  } catch (const Json::exception& e) {
+    throw core::UsageError(file.string() + ": unreadable: " + e.what());
+  }
+  if (record.value("format", "") != kFormat)
+    throw core::UsageError(file.string() + ": not a " + std::string(kFormat) + " record");
+  results::SweepReportInputs in = ReportLayout(record, file.string());
+  SweepOutcome out;
+  out.points = in.points.size();
+  std::vector<std::string> missing;
+  for (const results::SweepPoint& p : in.points)
+    if (!PointDone(dir, p.id)) missing.push_back(p.id);
+  if (!missing.empty()) {
+    std::string list;
+    for (std::size_t i = 0; i < missing.size() && i < 5; ++i) list += (i ? ", " : "") + missing[i];
+    if (missing.size() > 5) list += ", ...";
+    throw core::UsageError(dir + ": " + std::to_string(missing.size()) + " of " +
+                           std::to_string(out.points) + " points not finished (" + list +
+                           "); run the remaining shards, or the sweep again, first");
+  }
+  for (results::SweepPoint& p : in.points) {
+    const fs::path run(PointDir(dir, p.id));
+    p.metrics = core::LoadJsonFile((run / "metrics.json").string());
+    std::error_code e2;
+    if (fs::is_regular_file(run / "rate_snr.csv", e2))
+      p.rate_snr_csv = ReadText(run / "rate_snr.csv");
+  }
+  out.already_done = out.points;
+  out.warnings = results::WriteSweepReport(dir, in);
+  out.reported = true;
+  return out;
+}
+
+SweepOutcome RunSweep(const SweepSpec& spec, const SweepOptions& o) {
+  if (o.jobs < 1) throw core::UsageError("uavsim sweep: --jobs needs at least 1");
+  if (o.shard_count < 1 || o.shard_index < 0 || o.shard_index >= o.shard_count)
+    throw core::UsageError("uavsim sweep: --shard I/N needs 0 <= I < N");
+  SweepOutcome out;
+  out.points = spec.points.size();
+  const Json record = SweepRecord(spec);
+
+  std::unique_ptr<boost::mpi::environment> env;
+  std::unique_ptr<boost::mpi::communicator> world;
+  if (UnderMpirun()) {
+    env = std::make_unique<boost::mpi::environment>();
+    world = std::make_unique<boost::mpi::communicator>();
+    out.ranks = world->size();
+  }
+  const bool coordinator = !world || world->rank() == 0;
+  try {
+    if (!coordinator) {
+      out.mpi_worker = true;
+      world->barrier();  // rank 0 has prepared DIR
+      RunWorker(*world, spec, o, out);
+      return out;
+    }
+    std::deque<std::size_t> todo;
+    if (world) {
+      // Rank 0 prepares DIR; the others wait, and learn whether it could.
+      int ok = 0;
+      std::string error;
+      try {
+        PrepareDir(o.out_dir, record);
+        RemoveStalePartials(o.out_dir, ShardIds(spec, o));
+        todo = PointsToRun(spec, o, out);
+        ok = 1;
+      } catch (const std::exception& e) {
+        error = e.what();
+      }
+      if (!ok) {
+        std::cerr << error << "\n";
+        world->abort(2);
+      }
+      world->barrier();
+      RunCoordinator(*world, spec, o, std::move(todo), out);
+    } else {
+      PrepareDir(o.out_dir, record);
+      RemoveStalePartials(o.out_dir, ShardIds(spec, o));
+      todo = PointsToRun(spec, o, out);
+      RunLocal(spec, o, std::move(todo), out);
+    }
+  } catch (const Interrupted&) {
+    // Finished points are committed; under MPI the other ranks stop too.
+    if (world) {
+      std::cerr << "uavsim: interrupted; finished points are kept\n";
+      world->abort(130);
+    }
+    throw;
+  }
+  for (const SweepPointSpec& p : spec.points)
+    if (!PointDone(o.out_dir, p.id)) ++out.missing;
+  out.missing -= std::min(out.missing, out.failed);  // the rest: other shards' points
+  RemoveStalePartials(o.out_dir, ShardIds(spec, o));
+  if (out.missing == 0 && out.failed == 0) {
+    const SweepOutcome merged = MergeSweep(o.out_dir);
+    out.warnings = merged.warnings;
+    out.reported = true;
+  }
+  return out;
+}
+
+}  // namespace uavsim::sim

@@ -1,0 +1,76 @@
+// A sweep specification: a base scenario, parameters that each set one JSON
+// pointer of it (a list or range of values) or several at once (named
+// cases), and replications as seeds. Its grid is the Cartesian product of
+// the parameters' values times the seeds; every point is a whole scenario.
+//
+//   {
+//     "name": "loss_weather",
+//     "scenario": "../default.json",              (a path, or the scenario inline)
+//     "set": { "/duration_s": 20 },               (overrides for every point)
+//     "parameters": [
+//       { "name": "loss", "pointer": "/links/default/loss/p", "values": [0, 0.2, 0.4],
+//         "axis_label": "Packet loss probability" },
+//       { "name": "rain", "pointer": "/weather/rain_mm_h",
+//         "range": { "from": 0, "to": 50, "step": 25 } },
+//       { "name": "weather", "cases": [ { "label": "clear", "set": {} },
+//                                        { "label": "fog 300 m",
+//                                          "set": { "/weather/fog_visibility_m": 300 } } ] }
+//     ],
+//     "seeds": [1, 2, 3]                           (or { "from": 1, "count": 3 })
+//   }
+//
+// Loading is strict like a scenario's: unknown keys, wrong types, and every
+// grid point's scenario are checked before anything runs; errors name the
+// spec file and the spec's JSON pointer (and the point, for a value that is
+// invalid in the scenario).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "results/sweep_report.h"
+#include "sim/core/json_io.h"
+#include "sim/scenario.h"
+
+namespace uavsim::sim {
+
+// One value of a parameter: the assignments it makes, and how tables show it.
+struct SweepValue {
+  std::string label;
+  std::vector<std::pair<std::string, core::Json>> set;  // JSON pointer -> value
+};
+
+struct SweepParameter {
+  std::string name;
+  std::string pointer;     // "" for a cases parameter
+  std::string axis_label;  // for plots
+  std::vector<SweepValue> values;
+};
+
+struct SweepPointSpec {
+  std::string id;                // "p0000", ... in grid order
+  std::vector<int> value_index;  // per parameter
+  std::uint64_t seed = 0;
+  Scenario scenario;  // the point's scenario, validated
+};
+
+struct SweepSpec {
+  std::string file;  // where it was read from
+  std::string name;
+  std::vector<SweepParameter> parameters;
+  std::vector<std::uint64_t> seeds;
+  std::vector<SweepPointSpec> points;  // parameters' values (last fastest), then seeds
+  core::Json canonical;                // the spec with the base scenario resolved inline
+  // What the tables and plots show (results/sweep_report.h).
+  std::vector<results::SweepParameter> TableParameters() const;
+  std::vector<results::SweepAxis> Axes() const;
+};
+
+// Refuses grids larger than this many points.
+constexpr std::size_t kMaxSweepPoints = 100000;
+
+// Throws core::ConfigError naming the file and the spec's JSON pointer.
+SweepSpec LoadSweepSpec(const std::string& path);
+
+}  // namespace uavsim::sim
