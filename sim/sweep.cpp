@@ -284,6 +284,20 @@ std::set<std::string> ShardIds(const SweepSpec& spec, const SweepOptions& o) {
 
 int ThreadsPerPoint(int jobs) { return std::max(1, CoresAvailable() / (LocalRanks() * jobs)); }
 
+// Starts points from the front of `todo` while `pool` has free slots, each
+// into DIR/points/<id>. Returns whether it started any.
+bool FillSlots(ChildPool& pool, std::deque<std::size_t>& todo, const SweepSpec& spec,
+               const std::string& dir, int threads) {
+  bool started = false;
+  while (pool.HasSlot() && !todo.empty()) {
+    const std::size_t i = todo.front();
+    todo.pop_front();
+    pool.Add(LaunchPoint(spec.points[i], PointDir(dir, spec.points[i].id), threads, spec.file), i);
+    started = true;
+  }
+  return started;
+}
+
 // ---------------------------------------------------------------------------
 // Local execution.
 
@@ -300,14 +314,7 @@ void RunLocal(const SweepSpec& spec, const SweepOptions& o, std::deque<std::size
       throw Interrupted();
     }
     bool busy = false;
-    while (pool.HasSlot() && !todo.empty()) {
-      const std::size_t i = todo.front();
-      todo.pop_front();
-      pool.Add(
-          LaunchPoint(spec.points[i], PointDir(o.out_dir, spec.points[i].id), threads, spec.file),
-          i);
-      busy = true;
-    }
+    busy = FillSlots(pool, todo, spec, o.out_dir, threads) || busy;
     while (const auto done = pool.Reap()) {
       busy = true;
       if (done->second == 130 || InterruptRequested()) {
@@ -401,14 +408,7 @@ void RunCoordinator(boost::mpi::communicator& world, const SweepSpec& spec, cons
       busy = true;
     }
     // Rank 0's own slots; a point is handed to a worker first when both wait.
-    while (pool.HasSlot() && !todo.empty()) {
-      const std::size_t i = todo.front();
-      todo.pop_front();
-      pool.Add(
-          LaunchPoint(spec.points[i], PointDir(o.out_dir, spec.points[i].id), threads, spec.file),
-          i);
-      busy = true;
-    }
+    busy = FillSlots(pool, todo, spec, o.out_dir, threads) || busy;
     while (const auto done = pool.Reap()) {
       count(done->second);
       busy = true;
