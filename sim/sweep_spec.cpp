@@ -177,7 +177,10 @@ SweepParameter ReadParameter(const SpecReader& r, const Json& j, const std::stri
       v.set.emplace_back(p.pointer, values[i]);
       p.values.push_back(std::move(v));
     }
-    p.axis_label = p.name + " (" + p.pointer + ")";
+    // "rain (mm/h)" for a key with a unit suffix, else the name and pointer.
+    const std::string leaf_label = AxisLabelOfKey(Leaf(p.pointer));
+    p.axis_label =
+        leaf_label.find(" (") != std::string::npos ? leaf_label : p.name + " (" + p.pointer + ")";
   }
   if (j.contains("axis_label")) p.axis_label = r.String(j["axis_label"], at + "/axis_label");
   value_pointers.push_back(spec_pointers);
@@ -267,7 +270,7 @@ SweepSpec LoadSweepSpec(const std::string& path) {
   }
   const std::string base_blame = "/scenario";
   try {
-    ScenarioFromJson(base, scenario_file, base_dir);
+    out.base_resolved = ResolvedJson(ScenarioFromJson(base, scenario_file, base_dir));
   } catch (const ConfigError& e) {
     std::string at = base_blame;
     for (const Assignment& a : fixed)
@@ -287,10 +290,9 @@ SweepSpec LoadSweepSpec(const std::string& path) {
         r.Fail(at + "/name", "repeats an earlier parameter's name");
     }
   }
-  out.seeds =
-      spec.contains("seeds")
-          ? ReadSeeds(r, spec["seeds"])
-          : std::vector<std::uint64_t>{ScenarioFromJson(base, scenario_file, base_dir).seed};
+  out.seeds = spec.contains("seeds")
+                  ? ReadSeeds(r, spec["seeds"])
+                  : std::vector<std::uint64_t>{out.base_resolved.at("seed").get<std::uint64_t>()};
 
   double grid = static_cast<double>(out.seeds.size());
   for (const auto& p : out.parameters) grid *= static_cast<double>(p.values.size());
@@ -379,7 +381,7 @@ std::vector<results::SweepAxis> SweepSpec::Axes() const {
               [](const auto& u, const auto& v) { return u.second < v.second; });
     axes.push_back(std::move(a));
   };
-  const Json resolved_base = points.empty() ? Json() : ResolvedJson(points.front().scenario);
+  const Json& resolved_base = base_resolved;
   for (std::size_t k = 0; k < parameters.size(); ++k) {
     const SweepParameter& p = parameters[k];
     if (!p.pointer.empty()) {

@@ -61,7 +61,8 @@ struct SweepSpec {
   std::vector<SweepParameter> parameters;
   std::vector<std::uint64_t> seeds;
   std::vector<SweepPointSpec> points;  // parameters' values (last fastest), then seeds
-  core::Json canonical;                // the spec with the base scenario resolved inline
+  core::Json canonical;                // the spec with the base scenario inline
+  core::Json base_resolved;            // the base scenario (with "set"), every default filled
   // What the tables and plots show (results/sweep_report.h).
   std::vector<results::SweepParameter> TableParameters() const;
   std::vector<results::SweepAxis> Axes() const;

@@ -366,10 +366,33 @@ TEST_CASE("Sweep spec: the grid is values x range x cases x seeds, last paramete
     if (a.stem == "vs_rain") {
       CHECK(a.parameter == 1);
       CHECK(a.x_of_value == std::vector<std::pair<int, double>>{{0, 0}, {1, 0.1}, {2, 0.2}});
+      CHECK(a.x_label == "rain (mm/h)");  // the key's unit suffix
     }
   }
   CHECK(stems.count("vs_loss") == 1);
   CHECK(stems.count("vs_rain") == 1);
+  CHECK(stems.size() == 2);  // the fog case sets two pointers: no curve along either
+
+  // A cases parameter: a curve per pointer over the cases that set only it,
+  // and the cases that set nothing at the base value (clear: no rain).
+  const std::string cases = dir + "/cases.json";
+  WriteFile(cases, CheapSpec("cases", R"("parameters": [
+      {"name": "weather", "cases": [
+        {"label": "rain 25", "set": {"/weather/rain_mm_h": 25}},
+        {"label": "clear", "set": {}},
+        {"label": "rain 10", "set": {"/weather/rain_mm_h": 10}},
+        {"label": "fog 300 m", "set": {"/weather/fog_visibility_m": 300}},
+        {"label": "fog 30 m", "set": {"/weather/fog_visibility_m": 30}}]}])"));
+  const auto axes = uavsim::sim::LoadSweepSpec(cases).Axes();
+  REQUIRE(axes.size() == 2);
+  CHECK(axes[0].stem == "vs_rain_mm_h");
+  CHECK(axes[0].x_label == "rain (mm/h)");
+  CHECK(axes[0].x_of_value == std::vector<std::pair<int, double>>{{1, 0}, {2, 10}, {0, 25}});
+  CHECK_FALSE(axes[0].log_x);  // 0 is on it
+  CHECK(axes[1].stem == "vs_fog_visibility_m");
+  CHECK(axes[1].x_label == "fog visibility (m)");
+  CHECK(axes[1].x_of_value == std::vector<std::pair<int, double>>{{4, 30}, {3, 300}});
+  CHECK_FALSE(axes[1].log_x);  // a factor of 10: linear
 }
 
 TEST_CASE("Sweep spec: ranges give exact decimal values, seeds from-count, no parameters",
