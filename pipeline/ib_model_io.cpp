@@ -1,14 +1,12 @@
 #include "pipeline/ib_model_io.h"
 
-#include <unistd.h>
-
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <stdexcept>
 #include <system_error>
 #include <vector>
 
+#include "sim/core/atomic_file.h"
 #include "sim/core/error.h"
 #include "sim/core/json_io.h"
 
@@ -16,22 +14,6 @@ namespace uavsim::pipeline {
 namespace {
 
 namespace fs = std::filesystem;
-
-// A temp name in the target's folder, so the rename cannot cross filesystems.
-fs::path TempPath(const fs::path& target) {
-  fs::path tmp = target;
-  tmp += ".tmp-" + std::to_string(::getpid());
-  return tmp;
-}
-
-void CommitTemp(const fs::path& tmp, const fs::path& target) {
-  std::error_code ec;
-  fs::rename(tmp, target, ec);
-  if (ec) {
-    fs::remove(tmp, ec);
-    throw std::runtime_error(target.string() + ": cannot write: " + ec.message());
-  }
-}
 
 std::string ShapeText(const std::vector<std::int64_t>& shape) {
   std::string s = "[";
@@ -69,33 +51,19 @@ void SaveIbCcModel(const IbCcModel& model, const std::string& json_path, const s
   weights.replace_extension(".pt");
   if (weights == sidecar) throw std::runtime_error(json_path + ": the sidecar must not end in .pt");
 
-  const fs::path weights_tmp = TempPath(weights);
   try {
-    torch::save(model, weights_tmp.string());
+    core::WriteViaTemporary(weights.string(),
+                            [&](const std::string& temp) { torch::save(model, temp); });
   } catch (const c10::Error& e) {
-    std::error_code ec;
-    fs::remove(weights_tmp, ec);
     throw std::runtime_error(weights.string() + ": cannot write: " + e.what_without_backtrace());
   }
-  CommitTemp(weights_tmp, weights);
 
   IbModelFile file;
   file.format = IbModelFile::kFormat;
   file.weights = weights.filename().string();
   file.note = note;
   file.config = model->config();
-  const fs::path sidecar_tmp = TempPath(sidecar);
-  {
-    std::ofstream out(sidecar_tmp, std::ios::binary | std::ios::trunc);
-    out << core::ToJson(file).dump(2) << '\n';
-    out.close();
-    if (!out) {
-      std::error_code ec;
-      fs::remove(sidecar_tmp, ec);
-      throw std::runtime_error(json_path + ": cannot write");
-    }
-  }
-  CommitTemp(sidecar_tmp, sidecar);
+  core::WriteFileAtomic(json_path, core::ToJson(file).dump(2) + "\n");
 }
 
 IbModelFile ReadIbCcSidecar(const std::string& json_path) {

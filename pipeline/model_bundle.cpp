@@ -1,12 +1,10 @@
 #include "pipeline/model_bundle.h"
 
-#include <unistd.h>
-
 #include <filesystem>
-#include <fstream>
 #include <stdexcept>
 #include <system_error>
 
+#include "sim/core/atomic_file.h"
 #include "sim/core/error.h"
 #include "sim/core/json_io.h"
 
@@ -59,23 +57,7 @@ ModelManifest ReadModelManifest(const std::string& manifest_path) {
 }
 
 void WriteModelManifest(const ModelManifest& m, const std::string& manifest_path) {
-  const std::string tmp = manifest_path + ".tmp-" + std::to_string(::getpid());
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    out << core::ToJson(m).dump(2) << '\n';
-    out.close();
-    if (!out) {
-      std::error_code ec;
-      fs::remove(tmp, ec);
-      throw std::runtime_error(manifest_path + ": cannot write");
-    }
-  }
-  std::error_code ec;
-  fs::rename(tmp, manifest_path, ec);
-  if (ec) {
-    fs::remove(tmp, ec);
-    throw std::runtime_error(manifest_path + ": cannot write: " + ec.message());
-  }
+  core::WriteFileAtomic(manifest_path, core::ToJson(m).dump(2) + "\n");
 }
 
 std::unique_ptr<UavLocModelFiles> UavLocModelFiles::Load(const std::string& path) {

@@ -1,16 +1,14 @@
 #include "pipeline/uavloc_model.h"
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <limits>
 #include <map>
 #include <stdexcept>
 #include <utility>
 
+#include "sim/core/atomic_file.h"
 #include "sim/core/error.h"
 #include "sim/core/json_io.h"
 
@@ -224,19 +222,6 @@ std::string SidecarPath(const std::string& path) { return path + ".json"; }
 
 namespace {
 
-std::string TempName(const std::string& path) {
-  return path + ".tmp-" + std::to_string(::getpid());
-}
-
-void Publish(const std::string& temp, const std::string& path) {
-  std::error_code ec;
-  std::filesystem::rename(temp, path, ec);
-  if (ec) {
-    std::filesystem::remove(temp, ec);
-    throw std::runtime_error(path + ": cannot write: " + ec.message());
-  }
-}
-
 // The first line of a LibTorch error, without its C++ backtrace.
 std::string Brief(const c10::Error& e) {
   std::string s = e.what_without_backtrace();
@@ -246,28 +231,12 @@ std::string Brief(const c10::Error& e) {
 }  // namespace
 
 void SaveUavLocModel(const UavLocModel& model, const std::string& path) {
-  const std::string weights_temp = TempName(path);
   try {
-    torch::save(model, weights_temp);
+    core::WriteViaTemporary(path, [&](const std::string& temp) { torch::save(model, temp); });
   } catch (const c10::Error& e) {
-    std::error_code ec;
-    std::filesystem::remove(weights_temp, ec);
     throw std::runtime_error(path + ": cannot write model weights: " + Brief(e));
   }
-  const std::string sidecar = SidecarPath(path);
-  const std::string sidecar_temp = TempName(sidecar);
-  {
-    std::ofstream out(sidecar_temp, std::ios::binary | std::ios::trunc);
-    out << core::ToJson(model->config()).dump(2) << "\n";
-    if (!out.flush()) {
-      std::error_code ec;
-      std::filesystem::remove(weights_temp, ec);
-      std::filesystem::remove(sidecar_temp, ec);
-      throw std::runtime_error(sidecar + ": cannot write model configuration");
-    }
-  }
-  Publish(weights_temp, path);
-  Publish(sidecar_temp, sidecar);
+  core::WriteFileAtomic(SidecarPath(path), core::ToJson(model->config()).dump(2) + "\n");
 }
 
 UavLocModel LoadUavLocModel(const std::string& path) {

@@ -1,52 +1,12 @@
 #include "results/run_directory.h"
 
-#include <fcntl.h>
 #include <unistd.h>
 
-#include <cerrno>
-#include <cstring>
 #include <filesystem>
 #include <stdexcept>
 
 namespace uavsim::results {
 namespace fs = std::filesystem;
-
-namespace {
-std::runtime_error IoError(const std::string& what, const std::string& path) {
-  return std::runtime_error(path + ": " + what + ": " + std::strerror(errno));
-}
-}  // namespace
-
-void WriteFileAtomic(const std::string& path, const std::string& content) {
-  const fs::path p(path);
-  const std::string tmp = (p.parent_path() / ("." + p.filename().string() + ".tmp")).string();
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) throw IoError("cannot create", tmp);
-  const char* data = content.data();
-  std::size_t left = content.size();
-  while (left > 0) {
-    const ssize_t n = ::write(fd, data, left);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      const auto err = IoError("cannot write", tmp);
-      ::close(fd);
-      ::unlink(tmp.c_str());
-      throw err;
-    }
-    data += n;
-    left -= static_cast<std::size_t>(n);
-  }
-  if (::close(fd) != 0) {
-    const auto err = IoError("cannot write", tmp);
-    ::unlink(tmp.c_str());
-    throw err;
-  }
-  if (::rename(tmp.c_str(), path.c_str()) != 0) {
-    const auto err = IoError("cannot rename into place", path);
-    ::unlink(tmp.c_str());
-    throw err;
-  }
-}
 
 RunDirectory::RunDirectory(std::string final_dir, bool force)
     : final_dir_(std::move(final_dir)), force_(force) {

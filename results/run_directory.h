@@ -7,13 +7,13 @@
 
 #include <string>
 
+#include "sim/core/atomic_file.h"
 #include "sim/core/json_io.h"
 
 namespace uavsim::results {
 
-// Writes `content` to `path` atomically (temp file in the same folder, fsync,
-// rename). Throws std::runtime_error naming the path on failure.
-void WriteFileAtomic(const std::string& path, const std::string& content);
+// Writes `content` to `path` atomically (sim/core/atomic_file.h).
+using core::WriteFileAtomic;
 
 class RunDirectory {
  public:

@@ -1,0 +1,22 @@
+// Files that appear all at once: written under a temporary name in the same
+// folder and renamed into place, so a reader (or a killed writer) never sees
+// a half-written file under its final name.
+#pragma once
+
+#include <functional>
+#include <string>
+
+namespace uavsim::core {
+
+// Writes `content` to `path` atomically. Throws std::runtime_error naming
+// the path on failure (the temporary file is removed).
+void WriteFileAtomic(const std::string& path, const std::string& content);
+
+// For writers that insist on a file name of their own (torch::save): calls
+// `write(temp)` with a temporary path beside `path`, then renames it into
+// place. Whatever `write` throws is rethrown after the temporary file is
+// removed; a failed rename throws std::runtime_error naming `path`.
+void WriteViaTemporary(const std::string& path,
+                       const std::function<void(const std::string&)>& write);
+
+}  // namespace uavsim::core
