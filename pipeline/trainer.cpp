@@ -109,6 +109,34 @@ std::vector<const Sample*> SamplesOf(const std::vector<Episode>& episodes, Modal
   return out;
 }
 
+// Whether an observation shows the target (TrainOptions::stage1_label_gate_*).
+bool ShowsTarget(const Sample& s, const TrainOptions& o) {
+  if (s.camera) {
+    if (!(o.stage1_label_gate_deg > 0)) return true;
+    const Eigen::Vector3d to_truth = (s.truth_m - s.camera->eye_left_w).normalized();
+    const double cos_angle =
+        std::clamp(to_truth.dot(s.camera->bearing_left_w.normalized()), -1.0, 1.0);
+    return std::acos(cos_angle) <= o.stage1_label_gate_deg * M_PI / 180.0;
+  }
+  if (!s.points || !(o.stage1_label_gate_m > 0)) return true;
+  const PointObservation& p = *s.points;
+  if (p.count() == 0) return false;
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (std::size_t i = 0; i < p.count(); ++i)
+    centroid += Eigen::Vector3d(p.values[i * p.channels], p.values[i * p.channels + 1],
+                                p.values[i * p.channels + 2]);
+  centroid /= static_cast<double>(p.count());
+  return (centroid - s.truth_m).norm() <= o.stage1_label_gate_m;
+}
+
+std::vector<const Sample*> TargetSamplesOf(const std::vector<Episode>& episodes, Modality m,
+                                           const TrainOptions& o, std::size_t* dropped) {
+  std::vector<const Sample*> out;
+  for (const Sample* s : SamplesOf(episodes, m))
+    ShowsTarget(*s, o) ? out.push_back(s) : void(++*dropped);
+  return out;
+}
+
 // At most `n` of `all`, evenly spaced (every episode and time represented).
 std::vector<const Sample*> EvenSubset(const std::vector<const Sample*>& all, int n) {
   if (static_cast<int>(all.size()) <= n) return all;
@@ -164,8 +192,10 @@ IbCcModel TrainEncoder(Modality m, const Dataset& data, const TrainOptions& o,
   config.bottleneck = o.bottleneck;
   config.normalization = norm;
   IbCcModel model(config);
-  std::vector<const Sample*> train = SamplesOf(data.train, m);
-  std::vector<const Sample*> val = SamplesOf(data.validation, m);
+  std::size_t dropped = 0;
+  std::vector<const Sample*> train = TargetSamplesOf(data.train, m, o, &dropped);
+  std::vector<const Sample*> val = TargetSamplesOf(data.validation, m, o, &dropped);
+  report.label_gated_items = dropped;
   if (val.empty() && train.size() >= 14) {
     // The validation trajectories never saw this modality: hold back every
     // seventh training observation instead.
@@ -438,6 +468,8 @@ void TrainOptions::Validate() const {
               stage1_max_samples_per_epoch >= stage1_min_samples_per_epoch,
           "stage1_min/max_samples_per_epoch", "must satisfy 2 <= min <= max");
   require(stage1_max_validation_samples >= 1, "stage1_max_validation_samples", "must be >= 1");
+  require(stage1_label_gate_m >= 0 && stage1_label_gate_deg >= 0 && stage1_label_gate_deg <= 180,
+          "stage1_label_gate_m and stage1_label_gate_deg", "must be >= 0 (degrees at most 180)");
   require(stage2_sequence_windows >= 1 && stage2_min_steps_per_epoch >= 1,
           "stage2_sequence_windows and stage2_min_steps_per_epoch", "must be >= 1");
   require(
@@ -529,10 +561,12 @@ std::string ReportJson(const TrainReport& r, const TrainOptions& o) {
   j["latent_dim"] = o.latent_dim;
   j["bottleneck"] = o.bottleneck == IbBottleneck::kIb ? "ib" : "mlp";
   j["learning_rate"] = {{"stage1", o.stage1_lr}, {"stage2", o.stage2_lr}};
+  j["stage1_label_gate"] = {{"m", o.stage1_label_gate_m}, {"deg", o.stage1_label_gate_deg}};
   core::Json stages = core::Json::array();
   for (const StageReport& s : r.stages)
     stages.push_back({{"name", s.name},
                       {"train_items", s.train_items},
+                      {"label_gated_items", s.label_gated_items},
                       {"validation_items", s.validation_items},
                       {"epochs", s.epochs},
                       {"best_epoch", s.best_epoch},

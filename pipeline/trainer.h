@@ -40,6 +40,17 @@ struct TrainOptions {
   int stage1_min_samples_per_epoch = 640;    // small data sets are cycled ...
   int stage1_max_samples_per_epoch = 3000;   // ... large ones sampled
   int stage1_max_validation_samples = 1024;  // evenly spaced over the validation episodes
+  // Stage 1 learns where the target is in what a node saw; an observation
+  // of something else (a LiDAR or radar cluster of weather returns, a
+  // camera ROI on a bird) has no such answer, so its label is noise. Such
+  // observations are left out of stage 1 (not of stage 2, which must learn
+  // to discount them, nor of any evaluation): a point cluster whose centroid
+  // lies farther than stage1_label_gate_m from the truth, a camera ROI whose
+  // left bearing is off the truth's direction by more than
+  // stage1_label_gate_deg. 0: keep everything (the default: measured worse
+  // fused, see NOTES.md).
+  double stage1_label_gate_m = 0.0;
+  double stage1_label_gate_deg = 0.0;
   // Stage 2.
   double stage2_lr = 1e-3;
   int stage2_batch = 16;
@@ -63,8 +74,9 @@ struct TrainOptions {
 struct StageReport {
   std::string name;                                   // "camera", "lidar", "radar", "fusion"
   std::size_t train_items = 0, validation_items = 0;  // samples or sequences
-  int epochs = 0;                                     // run before stopping
-  int best_epoch = 0;                                 // 0: the initial weights
+  std::size_t label_gated_items = 0;  // stage 1: observations left out (not the target)
+  int epochs = 0;                     // run before stopping
+  int best_epoch = 0;                 // 0: the initial weights
   double initial_validation_loss = 0.0;
   double best_validation_loss = 0.0;
   double seconds = 0.0;

@@ -111,7 +111,8 @@ const char* kSweepHelp =
 const char* kTrainHelp =
     "usage: uavsim train SCENARIO.json [--out MODEL] [--quick] [--seed N] [--episodes N]\n"
     "                    [--episode-s S] [--lr RATE] [--bottleneck ib|mlp] [--threads N]\n"
-    "                    [--data FILE] [--set /ptr=value] [--force] [--quiet]\n"
+    "                    [--data FILE] [--label-gate M,DEG] [--set /ptr=value] [--force] "
+    "[--quiet]\n"
     "\n"
     "Generates training data by simulation and trains the UAVLoc model with LibTorch on\n"
     "the CPU. Each episode is the scenario with its own target trajectory (orbit,\n"
@@ -133,6 +134,9 @@ const char* kTrainHelp =
     "  --threads N    LibTorch threads (default 1); results depend on it\n"
     "  --data FILE    the simulated episodes: read FILE if it exists (no simulation),\n"
     "                 else simulate and write it (train again without simulating)\n"
+    "  --label-gate M,DEG  leave out of stage 1 the LiDAR/radar clusters whose centroid\n"
+    "                 is over M metres from the truth and camera ROIs over DEG degrees\n"
+    "                 off it (default off; see NOTES.md)\n"
     "  --force        replace an existing MODEL folder\n";
 
 const char* kBenchHelp =
@@ -294,7 +298,7 @@ std::uint64_t UnsignedOption(const std::string& cmd, const std::string& name, co
 int Train(int argc, char** argv) {
   const ParsedArgs a = Parse("train", argc, argv, 2,
                              {"--out", "--seed", "--episodes", "--episode-s", "--threads", "--set",
-                              "--data", "--lr", "--bottleneck"},
+                              "--data", "--lr", "--bottleneck", "--label-gate"},
                              {"--quick", "--quiet", "--force", "--help"});
   if (a.Has("--help")) return std::cout << kTrainHelp, kExitOk;
   const std::string& file = OneScenario("train", a);
@@ -320,6 +324,17 @@ int Train(int argc, char** argv) {
     if (*v != "ib" && *v != "mlp")
       throw UsageError("uavsim train: --bottleneck expects ib or mlp, got '" + *v + "'");
     c.mlp_bottleneck = *v == "mlp";
+  }
+  if (auto v = a.Value("--label-gate")) {
+    char* end = nullptr;
+    c.label_gate_m = std::strtod(v->c_str(), &end);
+    const bool comma = *end == ',';
+    if (comma) c.label_gate_deg = std::strtod(end + 1, &end);
+    if (!comma || *end != '\0' || !(c.label_gate_m >= 0 && c.label_gate_m <= 1e4) ||
+        !(c.label_gate_deg >= 0 && c.label_gate_deg <= 180))
+      throw UsageError(
+          "uavsim train: --label-gate expects M,DEG (metres >= 0, degrees 0..180), got '" + *v +
+          "'");
   }
   if (auto v = a.Value("--lr")) {
     char* end = nullptr;

@@ -195,6 +195,8 @@ pipeline::TrainReport RunTraining(const Scenario& base, const TrainCommand& c) {
   }
   if (c.learning_rate > 0) t.stage1_lr = t.stage2_lr = c.learning_rate;
   if (c.mlp_bottleneck) t.bottleneck = pipeline::IbBottleneck::kMlp;
+  t.stage1_label_gate_m = c.label_gate_m;
+  t.stage1_label_gate_deg = c.label_gate_deg;
   if (c.episodes > 0) plan.episodes = c.episodes;
   if (c.episode_s > 0) plan.episode_s = c.episode_s;
 

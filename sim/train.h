@@ -52,7 +52,9 @@ struct TrainCommand {
   double episode_s = 0.0;       // 0: the default for quick / full
   double learning_rate = 0.0;   // 0: the trainer's default
   bool mlp_bottleneck = false;  // the paper's MLP baseline instead of the IB head
-  int threads = 1;              // LibTorch intra-op threads (see NOTES.md: 1 is fastest here)
+  double label_gate_m = 0.0;    // stage 1 label gate (pipeline/trainer.h); 0: off
+  double label_gate_deg = 0.0;
+  int threads = 1;  // LibTorch intra-op threads (see NOTES.md: 1 is fastest here)
   // Episode file: read if it exists (no simulation), else written after
   // simulating. Empty: simulate, keep nothing.
   std::string data_file;

@@ -145,6 +145,10 @@ TrainOptions Tiny() {
   o.stage2_max_epochs = 5;
   o.stage2_min_steps_per_epoch = 5;
   o.stage2_sequence_windows = 20;
+  // The synthetic radar's 1 m noise puts a few single-point clusters past a
+  // 3 m gate; the gate has its own test.
+  o.stage1_label_gate_m = 0.0;
+  o.stage1_label_gate_deg = 0.0;
   return o;
 }
 
@@ -432,6 +436,50 @@ TEST_CASE("Trainer: the MLP bottleneck baseline trains, saves and loads as such"
   CHECK(files->encoder(Modality::kLidar).config().bottleneck == IbBottleneck::kMlp);
   // The baseline's code differs from the IB head's mu for the same input.
   CHECK(testing::ReadFile(dir + "/lidar.pt") != testing::ReadFile(TrainedOnce().dir + "/lidar.pt"));
+}
+
+TEST_CASE("Trainer: stage 1 leaves out observations of something other than the target",
+          "[pipeline]") {
+  // Every 5th LiDAR cluster 10 m off the truth (weather returns), every 7th
+  // camera ROI 10 degrees off its direction (a bird): exactly those are left
+  // out of stage 1; the 0.1 m LiDAR noise and the exact camera bearings keep
+  // every other one inside the 3 m / 3 degree gates.
+  Dataset data = Synthetic();
+  std::size_t off_lidar_train = 0, off_lidar = 0, off_camera_train = 0, off_camera = 0;
+  const Eigen::Matrix3d turn =
+      Eigen::AngleAxisd(10.0 * M_PI / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  for (auto* part : {&data.train, &data.validation})
+    for (Episode& e : *part) {
+      int lidar = 0, camera = 0;
+      for (Sample& s : e.samples) {
+        if (s.modality == Modality::kLidar && lidar++ % 5 == 0) {
+          for (std::size_t i = 0; i < s.points->count(); ++i) s.points->values[i * 4] += 10.0f;
+          ++off_lidar;
+          off_lidar_train += part == &data.train;
+        }
+        if (s.modality == Modality::kCamera && camera++ % 7 == 0) {
+          s.camera->bearing_left_w = turn * s.camera->bearing_left_w;
+          ++off_camera;
+          off_camera_train += part == &data.train;
+        }
+      }
+    }
+  REQUIRE(off_lidar > 0);
+  REQUIRE(off_camera > 0);
+  TrainOptions o = Tiny();
+  o.stage1_label_gate_m = 3.0;
+  o.stage1_label_gate_deg = 3.0;
+  InitTorch(1, kSeed);
+  const TrainReport r = TrainUavLoc(data, o, SomeManifest(), testing::TempDir("gate") + "/model");
+  REQUIRE(r.stages.size() == 4);
+  CHECK(r.stages[0].label_gated_items == off_camera);
+  CHECK(r.stages[0].train_items == CountOf(data.train, Modality::kCamera) - off_camera_train);
+  CHECK(r.stages[1].label_gated_items == off_lidar);
+  CHECK(r.stages[1].train_items == CountOf(data.train, Modality::kLidar) - off_lidar_train);
+  CHECK(r.stages[3].label_gated_items == 0);  // fusion sees everything
+  // The invalid gates are refused.
+  o.stage1_label_gate_deg = 200.0;
+  CHECK_THROWS_AS(o.Validate(), std::invalid_argument);
 }
 
 }  // namespace uavsim::pipeline

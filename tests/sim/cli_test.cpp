@@ -59,6 +59,8 @@ TEST_CASE("CLI: usage errors exit 2 with one line", "[sim]") {
                                              {"run", kDefault, "--duration", "abc"},
                                              {"run", kDefault, "--record", "sonar"},
                                              {"run", kDefault, "--out"},
+                                             {"train", kDefault, "--label-gate", "3"},
+                                             {"train", kDefault, "--label-gate", "3,200"},
                                              {"bench", "nothing"}}) {
     auto r = RunCli(args);
     INFO(args.front() << " ... " << r.err);
