@@ -648,7 +648,16 @@ void Ekf::Apply(Tracks& tracks, const Measurement& m, EkfNodeStats* stats) const
   Track& main = tracks.main;
   auto start = [&](Track& track) {
     Start(track, *m.start, m.t_s);
+    track.start_node = m.node;
     if (stats && &track == &main) ++stats->initiations;
+  };
+  // Whether m may confirm `track`: a ranging measurement, and for a track a
+  // radar started, from another node when there is one.
+  auto confirms = [&](const Track& track) {
+    if (!m.start) return false;
+    if (track.start_node < 0 || nodes_.size() < 2) return true;
+    return nodes_[static_cast<std::size_t>(track.start_node)].kind != NodeKind::kRadar ||
+           m.node != track.start_node;
   };
   if (!main.initialized) {
     if (m.start) start(main);
@@ -661,7 +670,7 @@ void Ekf::Apply(Tracks& tracks, const Measurement& m, EkfNodeStats* stats) const
   if (!lost && Update(main, m, stats) > 0) {
     // A second ranging measurement that agrees confirms a start; camera rays
     // alone cannot (a start far along a ray would pass them).
-    if (m.start) main.confirmed = true;
+    if (confirms(main)) main.confirmed = true;
     main.rejections = 0;
     return;
   }
@@ -684,6 +693,7 @@ void Ekf::Apply(Tracks& tracks, const Measurement& m, EkfNodeStats* stats) const
   Track& candidate = tracks.candidate;
   if (candidate.initialized && m.t_s - candidate.t_last_update_s <= config_.max_gap_s &&
       Update(candidate, m, nullptr) > 0) {
+    if (!confirms(candidate)) return;  // its own radar again: not yet
     main = candidate;
     main.confirmed = true;
     candidate = Track{};
