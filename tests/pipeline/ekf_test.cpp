@@ -856,6 +856,42 @@ TEST_CASE("Ekf: false alarms neither replace a confirmed track nor start one", "
   CHECK((*fresh.EstimateAt(0.4) - p).norm() < 0.5);
 }
 
+TEST_CASE("Ekf: a radar's persistent clutter does not confirm a track by itself", "[pipeline]") {
+  // Rain echoes stand at the same range and angle frame after frame. With a
+  // camera beside the radar, the track the clutter starts waits for another
+  // node to bear it out, which the camera's rays of the real UAV never do;
+  // with the radar alone, its own next frame confirms (nothing else could).
+  const Sensors s = DefaultSensors();
+  const MeiCamera cam(s.camera);
+  const Vector3d uav(0, 0, 30), clutter(-26, 26, 4);  // 5 m in front of the radar
+  auto radar_frame = [&](double t) {
+    PointObservation o;
+    o.t_s = t;
+    o.channels = 5;
+    o.sensor_position_w = s.radar.pose.position_m;
+    for (double v : {clutter.x(), clutter.y(), clutter.z(), -0.5, 20.0})
+      o.values.push_back(static_cast<float>(v));
+    return o;
+  };
+  Ekf both{EkfConfig{}}, radar_only{EkfConfig{}};
+  both.AddCamera("cam1", s.camera);
+  both.AddRadar("radar1", s.radar);
+  radar_only.AddRadar("radar1", s.radar);
+  RngStream rng(11, "clutter");
+  for (int k = 0; k < 60; ++k) {  // 2 s: radar at 15 Hz, camera at 30 Hz
+    const double t = k / 30.0;
+    both.Observe("cam1", *SimulateCamera(cam, uav, 0.25, 0.2, t, rng));
+    if (k % 2 == 0) {
+      both.Observe("radar1", radar_frame(t));
+      radar_only.Observe("radar1", radar_frame(t));
+    }
+  }
+  CHECK_FALSE(both.EstimateAt(2.0));
+  const auto alone = radar_only.EstimateAt(2.0);
+  REQUIRE(alone);
+  CHECK((*alone - clutter).norm() < 1.0);
+}
+
 TEST_CASE("Ekf: IMM mode probabilities follow the manoeuvre", "[pipeline]") {
   // Straight flight, then a constant 3 m/s^2 sideways from t = 10 s: the
   // CA mode (smooth turns) explains a steady acceleration best; the CV mode
