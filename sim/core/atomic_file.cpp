@@ -58,7 +58,10 @@ void WriteFileAtomic(const std::string& path, const std::string& content) {
 
 void WriteViaTemporary(const std::string& path,
                        const std::function<void(const std::string&)>& write) {
-  const std::string tmp = TemporaryBeside(path);
+  // "<path>.tmp-PID": torch::save names the folder inside its zip archive
+  // after the file name's stem, which is then <path>'s own file name, the
+  // same for every run (so the same weights give the same bytes).
+  const std::string tmp = path + ".tmp-" + std::to_string(::getpid());
   try {
     write(tmp);
   } catch (...) {

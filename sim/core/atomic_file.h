@@ -13,8 +13,9 @@ namespace uavsim::core {
 void WriteFileAtomic(const std::string& path, const std::string& content);
 
 // For writers that insist on a file name of their own (torch::save): calls
-// `write(temp)` with a temporary path beside `path`, then renames it into
-// place. Whatever `write` throws is rethrown after the temporary file is
+// `write(temp)` with the temporary path "<path>.tmp-PID", then renames it
+// into place (the temporary's stem is <path>'s file name, which torch::save
+// writes into the archive). Whatever `write` throws is rethrown after the temporary file is
 // removed; a failed rename throws std::runtime_error naming `path`.
 void WriteViaTemporary(const std::string& path,
                        const std::function<void(const std::string&)>& write);

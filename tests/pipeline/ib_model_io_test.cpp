@@ -112,6 +112,15 @@ TEST_CASE("IbModelIo: save then load gives identical outputs", "[pipeline]") {
     CHECK(file.config.normalization.centre_m == config.normalization.centre_m);
     CHECK(file.config.normalization.scale_m == 20.0);
     CHECK(file.config.normalization.image_width_px == 600.0);
+    // torch::save names its archive's folder after the file it writes: the
+    // final name, not a per-process temporary one, so that the same weights
+    // give the same bytes in every run (the shipped model reproduces).
+    const std::string weights = testing::ReadFile(dir + "/" + file.weights);
+    const auto entry = weights.find(file.weights + "/data/");
+    REQUIRE(entry != std::string::npos);
+    CHECK(entry > 0);
+    CHECK(weights[entry - 1] != '.');  // not ".lidar.pt/data/" (a hidden temporary's stem)
+    CHECK(weights.find(".tmp-") == std::string::npos);
   }
   // No temp files left behind.
   for (const auto& e : std::filesystem::directory_iterator(dir))
