@@ -651,11 +651,12 @@ void Ekf::Apply(Tracks& tracks, const Measurement& m, EkfNodeStats* stats) const
     track.start_node = m.node;
     if (stats && &track == &main) ++stats->initiations;
   };
-  // Whether m may confirm `track`: a ranging measurement, and for a track a
-  // radar started, from another node when there is one.
+  // Whether m may confirm `track`: a ranging measurement; unless
+  // radar_confirms_itself, for a track a radar started, one of another node
+  // when there is one.
   auto confirms = [&](const Track& track) {
     if (!m.start) return false;
-    if (track.start_node < 0 || nodes_.size() < 2) return true;
+    if (config_.radar_confirms_itself || track.start_node < 0 || nodes_.size() < 2) return true;
     return nodes_[static_cast<std::size_t>(track.start_node)].kind != NodeKind::kRadar ||
            m.node != track.start_node;
   };

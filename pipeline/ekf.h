@@ -112,10 +112,11 @@
 // track (a radar frame from its strongest detection, velocity known along
 // the line of sight only; unknown velocity has variance max_speed^2/3 per
 // axis, acceleration max_accel^2/3); a second ranging measurement inside
-// its gate confirms it (for a track a radar started, one of another node
-// when there is one: a radar's clutter, rain echoes or a multipath ghost,
-// stands at the same range and angle frame after frame and would confirm
-// itself), one outside restarts it, three rejections in a row
+// its gate confirms it (with radar_confirms_itself false, for a track a
+// radar started, one of another node when there is one: a radar's clutter,
+// rain echoes or a multipath ghost, stands at the same range and angle frame
+// after frame and would confirm itself), one outside restarts it, three
+// rejections in a row
 // drop it. Estimates come from confirmed tracks only. A confirmed track
 //   - is lost after max_gap_s without an accepted update, and then
 //     re-acquired like a new one (its predicted covariance would open the
@@ -123,7 +124,7 @@
 //     max_gap_s past the last update and held there;
 //   - once no ranging measurement has been accepted for ranging_timeout_s,
 //     lets a rejected ranging measurement start a candidate; a second one
-//     (of another node, for a radar's candidate, as above) rejected by the
+//     (of another node for a radar's candidate, as above) rejected by the
 //     track but accepted by the candidate replaces the track (camera rays cannot tell a wrong
 //     range; a lone false alarm cannot take a good track away).
 //

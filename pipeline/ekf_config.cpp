@@ -23,6 +23,7 @@ void Visit(V& v, EkfConfig& c) {
   v("max_gap_s", c.max_gap_s, Rule::Positive(1e4));
   v("ranging_timeout_s", c.ranging_timeout_s, Rule::Positive(1e4));
   v("reorder_window_s", c.reorder_window_s, Rule::NonNegative(60.0));
+  v("radar_confirms_itself", c.radar_confirms_itself);
   v.Check(c.max_gap_s > c.reorder_window_s, "max_gap_s",
           "max_gap_s (" + FormatNumber(c.max_gap_s) + " s) must exceed reorder_window_s (" +
               FormatNumber(c.reorder_window_s) + " s)");

@@ -48,6 +48,11 @@ struct EkfConfig {
                                    // consistent rejected ones replace the track
   double reorder_window_s = 0.2;   // out-of-order tolerance: measurements this much older
                                    // than the newest time seen are still applied in order
+  // Whether a radar's next frame may confirm the track its own frame started.
+  // false: another node must (a radar's rain clutter stands still frame after
+  // frame and confirms itself; but in fog, where LiDAR and camera fail, the
+  // radar alone then never starts a track). Measured in NOTES.md.
+  bool radar_confirms_itself = true;
 
   // LiDAR centroid: floor on its standard deviation per axis (the visible
   // surface's offset from the target's centre), and the pseudo-count of the

@@ -857,10 +857,11 @@ TEST_CASE("Ekf: false alarms neither replace a confirmed track nor start one", "
 }
 
 TEST_CASE("Ekf: a radar's persistent clutter does not confirm a track by itself", "[pipeline]") {
-  // Rain echoes stand at the same range and angle frame after frame. With a
-  // camera beside the radar, the track the clutter starts waits for another
-  // node to bear it out, which the camera's rays of the real UAV never do;
-  // with the radar alone, its own next frame confirms (nothing else could).
+  // Rain echoes stand at the same range and angle frame after frame. With
+  // radar_confirms_itself false and a camera beside the radar, the track the
+  // clutter starts waits for another node to bear it out, which the camera's
+  // rays of the real UAV never do; with the radar alone, or by default, its
+  // own next frame confirms.
   const Sensors s = DefaultSensors();
   const MeiCamera cam(s.camera);
   const Vector3d uav(0, 0, 30), clutter(-26, 26, 4);  // 5 m in front of the radar
@@ -873,20 +874,25 @@ TEST_CASE("Ekf: a radar's persistent clutter does not confirm a track by itself"
       o.values.push_back(static_cast<float>(v));
     return o;
   };
-  Ekf both{EkfConfig{}}, radar_only{EkfConfig{}};
-  both.AddCamera("cam1", s.camera);
-  both.AddRadar("radar1", s.radar);
+  EkfConfig strict;
+  strict.radar_confirms_itself = false;
+  Ekf both{strict}, radar_only{strict}, by_default{EkfConfig{}};
+  for (Ekf* e : {&both, &by_default}) {
+    e->AddCamera("cam1", s.camera);
+    e->AddRadar("radar1", s.radar);
+  }
   radar_only.AddRadar("radar1", s.radar);
   RngStream rng(11, "clutter");
   for (int k = 0; k < 60; ++k) {  // 2 s: radar at 15 Hz, camera at 30 Hz
     const double t = k / 30.0;
-    both.Observe("cam1", *SimulateCamera(cam, uav, 0.25, 0.2, t, rng));
-    if (k % 2 == 0) {
-      both.Observe("radar1", radar_frame(t));
-      radar_only.Observe("radar1", radar_frame(t));
-    }
+    const CameraObservation o = *SimulateCamera(cam, uav, 0.25, 0.2, t, rng);
+    both.Observe("cam1", o);
+    by_default.Observe("cam1", o);
+    if (k % 2 == 0)
+      for (Ekf* e : {&both, &radar_only, &by_default}) e->Observe("radar1", radar_frame(t));
   }
   CHECK_FALSE(both.EstimateAt(2.0));
+  CHECK(by_default.EstimateAt(2.0));  // the clutter's own track
   const auto alone = radar_only.EstimateAt(2.0);
   REQUIRE(alone);
   CHECK((*alone - clutter).norm() < 1.0);
