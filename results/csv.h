@@ -8,6 +8,10 @@
 
 namespace uavsim::results {
 
+// The cells of one line of a plain CSV (no quoting): split at every comma,
+// so "a,,b," has four cells and "" one.
+std::vector<std::string> SplitCsvLine(const std::string& line);
+
 // Fixed-point with `decimals` digits; "-0.000" is printed as "0.000".
 std::string FormatFixed(double x, int decimals);
 

@@ -19,6 +19,8 @@
 #include <utility>
 #include <vector>
 
+#include "results/csv.h"
+
 extern char** environ;
 
 namespace uavsim::results {
@@ -49,15 +51,6 @@ bool HasControlChars(const std::string& s) {
   for (char c : s)
     if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) return true;
   return false;
-}
-
-std::vector<std::string> SplitCsvLine(const std::string& line) {
-  std::vector<std::string> cells;
-  std::string cell;
-  std::istringstream in(line);
-  while (std::getline(in, cell, ',')) cells.push_back(cell);
-  if (!line.empty() && line.back() == ',') cells.emplace_back();
-  return cells;
 }
 
 bool ParseNumber(const std::string& s, double* x) {

@@ -92,17 +92,6 @@ struct PointRates {
   std::map<std::pair<std::string, double>, double> rate;  // (beam, SNR) -> rate
 };
 
-std::vector<std::string> SplitOnComma(const std::string& line) {
-  std::vector<std::string> cells(1);
-  for (char c : line) {
-    if (c == ',')
-      cells.emplace_back();
-    else
-      cells.back() += c;
-  }
-  return cells;
-}
-
 // Parses "snr_db,beam,rate_bps_hz" rows (columns found by name). Empty text =
 // no rates. Throws std::invalid_argument naming the point for anything else
 // malformed.
@@ -123,7 +112,7 @@ PointRates ParseRateSnr(const SweepPoint& point) {
     ++line_no;
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (line.empty()) continue;
-    std::vector<std::string> cells = SplitOnComma(line);
+    std::vector<std::string> cells = SplitCsvLine(line);
     if (header.empty()) {
       header = std::move(cells);
       for (std::size_t i = 0; i < header.size(); ++i) {
