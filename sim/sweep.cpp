@@ -261,16 +261,16 @@ void Nap() { std::this_thread::sleep_for(std::chrono::milliseconds(10)); }
 // Points this invocation should run: its shard, not yet done.
 std::deque<std::size_t> PointsToRun(const SweepSpec& spec, const SweepOptions& o,
                                     SweepOutcome& out) {
-  std::deque<std::size_t> todo;
+  std::deque<std::size_t> queue;
   for (std::size_t i = 0; i < spec.points.size(); ++i) {
     if (PointDone(o.out_dir, spec.points[i].id)) {
       ++out.already_done;
       continue;
     }
     if (static_cast<int>(i % static_cast<std::size_t>(o.shard_count)) == o.shard_index)
-      todo.push_back(i);
+      queue.push_back(i);
   }
-  return todo;
+  return queue;
 }
 
 // The ids of this invocation's shard.
@@ -284,14 +284,14 @@ std::set<std::string> ShardIds(const SweepSpec& spec, const SweepOptions& o) {
 
 int ThreadsPerPoint(int jobs) { return std::max(1, CoresAvailable() / (LocalRanks() * jobs)); }
 
-// Starts points from the front of `todo` while `pool` has free slots, each
+// Starts points from the front of `queue` while `pool` has free slots, each
 // into DIR/points/<id>. Returns whether it started any.
-bool FillSlots(ChildPool& pool, std::deque<std::size_t>& todo, const SweepSpec& spec,
+bool FillSlots(ChildPool& pool, std::deque<std::size_t>& queue, const SweepSpec& spec,
                const std::string& dir, int threads) {
   bool started = false;
-  while (pool.HasSlot() && !todo.empty()) {
-    const std::size_t i = todo.front();
-    todo.pop_front();
+  while (pool.HasSlot() && !queue.empty()) {
+    const std::size_t i = queue.front();
+    queue.pop_front();
     pool.Add(LaunchPoint(spec.points[i], PointDir(dir, spec.points[i].id), threads, spec.file), i);
     started = true;
   }
@@ -301,20 +301,20 @@ bool FillSlots(ChildPool& pool, std::deque<std::size_t>& todo, const SweepSpec& 
 // ---------------------------------------------------------------------------
 // Local execution.
 
-void RunLocal(const SweepSpec& spec, const SweepOptions& o, std::deque<std::size_t> todo,
+void RunLocal(const SweepSpec& spec, const SweepOptions& o, std::deque<std::size_t> queue,
               SweepOutcome& out) {
-  core::Progress progress("sweep " + spec.name, static_cast<double>(todo.size()), "points",
+  core::Progress progress("sweep " + spec.name, static_cast<double>(queue.size()), "points",
                           o.quiet);
   const int threads = ThreadsPerPoint(o.jobs);
   ChildPool pool(o.jobs);
   std::size_t finished = 0;
-  while (!todo.empty() || !pool.empty()) {
+  while (!queue.empty() || !pool.empty()) {
     if (InterruptRequested()) {
       pool.KillAll();
       throw Interrupted();
     }
     bool busy = false;
-    busy = FillSlots(pool, todo, spec, o.out_dir, threads) || busy;
+    busy = FillSlots(pool, queue, spec, o.out_dir, threads) || busy;
     while (const auto done = pool.Reap()) {
       busy = true;
       if (done->second == 130 || InterruptRequested()) {
@@ -367,9 +367,9 @@ void CommitPoint(const std::string& dir, const std::string& id,
 }
 
 void RunCoordinator(boost::mpi::communicator& world, const SweepSpec& spec, const SweepOptions& o,
-                    std::deque<std::size_t> todo, SweepOutcome& out) {
+                    std::deque<std::size_t> queue, SweepOutcome& out) {
   core::Progress progress("sweep " + spec.name + " (" + std::to_string(world.size()) + " ranks)",
-                          static_cast<double>(todo.size()), "points", o.quiet);
+                          static_cast<double>(queue.size()), "points", o.quiet);
   const int threads = ThreadsPerPoint(o.jobs);
   ChildPool pool(o.jobs);
   int workers = world.size() - 1;  // not yet told to stop
@@ -379,7 +379,7 @@ void RunCoordinator(boost::mpi::communicator& world, const SweepSpec& spec, cons
     rc == 0 ? ++out.ran : ++out.failed;
     progress.Update(static_cast<double>(finished));
   };
-  while (!todo.empty() || !pool.empty() || workers > 0 || remote > 0) {
+  while (!queue.empty() || !pool.empty() || workers > 0 || remote > 0) {
     if (InterruptRequested()) {
       pool.KillAll();
       throw Interrupted();
@@ -388,9 +388,9 @@ void RunCoordinator(boost::mpi::communicator& world, const SweepSpec& spec, cons
     while (auto st = world.iprobe(boost::mpi::any_source, kRequest)) {
       world.recv(st->source(), kRequest);
       long long assign = -1;
-      if (!todo.empty()) {
-        assign = static_cast<long long>(todo.front());
-        todo.pop_front();
+      if (!queue.empty()) {
+        assign = static_cast<long long>(queue.front());
+        queue.pop_front();
         ++remote;
       } else {
         --workers;
@@ -408,7 +408,7 @@ void RunCoordinator(boost::mpi::communicator& world, const SweepSpec& spec, cons
       busy = true;
     }
     // Rank 0's own slots; a point is handed to a worker first when both wait.
-    busy = FillSlots(pool, todo, spec, o.out_dir, threads) || busy;
+    busy = FillSlots(pool, queue, spec, o.out_dir, threads) || busy;
     while (const auto done = pool.Reap()) {
       count(done->second);
       busy = true;
@@ -543,7 +543,7 @@ SweepOutcome RunSweep(const SweepSpec& spec, const SweepOptions& o) {
       RunWorker(*world, spec, o, out);
       return out;
     }
-    std::deque<std::size_t> todo;
+    std::deque<std::size_t> queue;
     if (world) {
       // Rank 0 prepares DIR; the others wait, and learn whether it could.
       int ok = 0;
@@ -551,7 +551,7 @@ SweepOutcome RunSweep(const SweepSpec& spec, const SweepOptions& o) {
       try {
         PrepareDir(o.out_dir, record);
         RemoveStalePartials(o.out_dir, ShardIds(spec, o));
-        todo = PointsToRun(spec, o, out);
+        queue = PointsToRun(spec, o, out);
         ok = 1;
       } catch (const std::exception& e) {
         error = e.what();
@@ -561,12 +561,12 @@ SweepOutcome RunSweep(const SweepSpec& spec, const SweepOptions& o) {
         world->abort(2);
       }
       world->barrier();
-      RunCoordinator(*world, spec, o, std::move(todo), out);
+      RunCoordinator(*world, spec, o, std::move(queue), out);
     } else {
       PrepareDir(o.out_dir, record);
       RemoveStalePartials(o.out_dir, ShardIds(spec, o));
-      todo = PointsToRun(spec, o, out);
-      RunLocal(spec, o, std::move(todo), out);
+      queue = PointsToRun(spec, o, out);
+      RunLocal(spec, o, std::move(queue), out);
     }
   } catch (const Interrupted&) {
     // Finished points are committed; under MPI the other ranks stop too.
