@@ -23,10 +23,12 @@ std::unique_ptr<EdgeLocalizer> EdgeLocalizer::Load(const std::string& path) {
       new EdgeLocalizer(std::make_unique<Impl>(std::move(model))));
 }
 
-std::unique_ptr<EdgeLocalizer> EdgeLocalizer::Create(int latent_dim, double window_s) {
+std::unique_ptr<EdgeLocalizer> EdgeLocalizer::Create(int latent_dim, double window_s,
+                                                     bool anchored) {
   UavLocModelConfig config;
   config.latent_dim = latent_dim;
   config.window_s = window_s;
+  config.anchored = anchored;
   UavLocModel model(config);
   model->eval();
   return std::unique_ptr<EdgeLocalizer>(
@@ -57,5 +59,6 @@ void EdgeLocalizer::Reset() {
 
 int EdgeLocalizer::latent_dim() const { return impl_->model->config().latent_dim; }
 double EdgeLocalizer::window_s() const { return impl_->model->config().window_s; }
+bool EdgeLocalizer::anchored() const { return impl_->model->config().anchored; }
 
 }  // namespace uavsim::pipeline

@@ -23,9 +23,11 @@ class EdgeLocalizer {
   // missing, malformed or mismatched model.
   static std::unique_ptr<EdgeLocalizer> Load(const std::string& path);
   // Fresh untrained weights (from LibTorch's generator) for a latent size z
-  // and window t^w, other sizes at their defaults: for benchmarks and tests.
-  // Throws std::invalid_argument for an invalid size.
-  static std::unique_ptr<EdgeLocalizer> Create(int latent_dim, double window_s);
+  // and window t^w, the paper's or the anchored head, other sizes at their
+  // defaults: for benchmarks and tests. Throws std::invalid_argument for an
+  // invalid size.
+  static std::unique_ptr<EdgeLocalizer> Create(int latent_dim, double window_s,
+                                               bool anchored = false);
   ~EdgeLocalizer();
   EdgeLocalizer(const EdgeLocalizer&) = delete;
   EdgeLocalizer& operator=(const EdgeLocalizer&) = delete;
@@ -43,7 +45,10 @@ class EdgeLocalizer {
   // Forgets the track: the next window starts from a zero state.
   void Reset();
 
-  int latent_dim() const;   // z the model expects from every node
+  int latent_dim() const;  // z the model expects from every node
+  // Whether the model uses the nodes' geometric anchors (pipeline/anchors.h),
+  // which the nodes then send with their latents.
+  bool anchored() const;
   double window_s() const;  // t^w the model was trained with
 
  private:

@@ -1,6 +1,7 @@
 #include "pipeline/te_align.h"
 
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -108,6 +109,19 @@ AlignedWindow TeAlign::Align(const WindowInputs& window) const {
     out.mask[static_cast<std::size_t>(m)] = count > 0 ? 1.0f : 0.0f;
     if (count == 0) continue;
     for (std::size_t j = 0; j < z; ++j) pooled[j] = static_cast<float>(sum[j] / count);
+  }
+  return out;
+}
+
+std::array<GeometricAnchor, kModalityCount> TeAlign::LatestAnchors(
+    const WindowInputs& window) const {
+  std::array<GeometricAnchor, kModalityCount> out;
+  for (int m = 0; m < kModalityCount; ++m) {
+    double latest = -std::numeric_limits<double>::infinity();
+    for (const LatentFrame& frame : window.frames[static_cast<std::size_t>(m)])
+      if (frame.anchor.kind != GeometricAnchor::Kind::kNone && frame.t_s >= latest &&
+          WindowOf(frame.t_s) == window.window)
+        latest = frame.t_s, out[static_cast<std::size_t>(m)] = frame.anchor;
   }
   return out;
 }

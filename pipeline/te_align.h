@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "pipeline/anchors.h"
 #include "pipeline/observations.h"
 
 namespace uavsim::pipeline {
@@ -33,6 +34,9 @@ struct TeAlignConfig {
 struct LatentFrame {
   double t_s = 0.0;
   std::vector<float> latent;  // size z
+  // Where the node's pre-processing put the target (an anchored model's
+  // input; TE-Align ignores it).
+  GeometricAnchor anchor;
 };
 
 // Everything that arrived for window k, per modality (index: Modality).
@@ -75,6 +79,9 @@ class TeAlign {
   // are ignored and counted. Throws std::invalid_argument if a latent's size
   // is not z or it holds a non-finite value.
   AlignedWindow Align(const WindowInputs& window) const;
+  // Per modality the anchor of the latest frame stamped in the window (kNone
+  // when there is none).
+  std::array<GeometricAnchor, kModalityCount> LatestAnchors(const WindowInputs& window) const;
 
   const TeAlignConfig& config() const { return config_; }
 

@@ -74,7 +74,7 @@ struct EarlyStopping {
 template <class TrainEpoch, class Validate, class Checkpoint>
 void RunEpochs(torch::nn::Module& model, int max_epochs, int patience, const std::string& label,
                bool quiet, TrainEpoch train_epoch, Validate validate, Checkpoint checkpoint,
-               StageReport& report) {
+               StageReport& report, std::function<void(int)> epochs_since_best = {}) {
   BestWeights best;
   best.Take(model);
   EarlyStopping stopping{patience};
@@ -90,6 +90,7 @@ void RunEpochs(torch::nn::Module& model, int max_epochs, int patience, const std
     }
     progress.Update(epoch);
     if (stopping.Stop()) break;
+    if (epochs_since_best) epochs_since_best(epoch - stopping.best_epoch);
   }
   progress.Finish();
   best.Restore(model);
@@ -258,6 +259,8 @@ struct WindowSequence {
   torch::Tensor latents;  // [K, M, z]
   torch::Tensor mask;     // [K, M]
   torch::Tensor truth;    // [K, 3]
+  // Per window, each modality's latest anchor (pipeline/anchors.h).
+  std::vector<std::array<GeometricAnchor, kModalityCount>> anchors;
 };
 
 // mu of every sample, in the episodes' order.
@@ -303,12 +306,15 @@ WindowSequence AlignEpisode(const Episode& ep, const std::vector<std::vector<flo
     const std::int64_t k = align.WindowOf(s.t_s);
     if (k < 1 || k > k_count) continue;
     inputs[static_cast<std::size_t>(k - 1)].frames[static_cast<int>(s.modality)].push_back(
-        {s.t_s, latents[i]});
+        {s.t_s, latents[i], s.camera ? AnchorOf(*s.camera) : AnchorOf(*s.points)});
   }
   std::vector<std::vector<AlignedWindow>> one(1);
-  for (const WindowInputs& w : inputs) one[0].push_back(align.Align(w));
-  const FusionBatch b = StackWindows(one);
   WindowSequence seq;
+  for (const WindowInputs& w : inputs) {
+    one[0].push_back(align.Align(w));
+    seq.anchors.push_back(align.LatestAnchors(w));
+  }
+  const FusionBatch b = StackWindows(one);
   seq.latents = b.latents[0];
   seq.mask = b.mask[0];
   std::vector<Eigen::Vector3d> truth(ep.window_truth.begin(), ep.window_truth.end());
@@ -329,13 +335,57 @@ torch::Tensor MaskedMse(const torch::Tensor& y_hat, const torch::Tensor& y,
   return ((y_hat - y).square().sum(2) * w).sum() / w.sum().clamp_min(1.0);
 }
 
+// The anchors the edge would hold over windows [start, start + K) of `s` from
+// a fresh tracker, where mask [K, M] is what arrived: a modality masked out in
+// a window brings no anchor either.
+std::vector<AnchorWindow> TrackAnchors(const WindowSequence& s, std::int64_t start,
+                                       const torch::Tensor& mask, const UavLocModelConfig& c) {
+  AnchorTracker tracker(c.window_s, c.position_centre_m, c.position_scale_m);
+  const torch::Tensor m = mask.to(torch::kFloat32).contiguous();
+  const auto acc = m.accessor<float, 2>();
+  std::vector<AnchorWindow> out;
+  for (std::int64_t i = 0; i < m.size(0); ++i) {
+    std::array<GeometricAnchor, kModalityCount> arrived =
+        s.anchors[static_cast<std::size_t>(start + i)];
+    for (int j = 0; j < kModalityCount; ++j)
+      if (acc[i][j] < 0.5f) arrived[static_cast<std::size_t>(j)] = {};
+    out.push_back(tracker.Update(i + 1, arrived));
+  }
+  return out;
+}
+
+// The whole sequence through the model with what mask [K, M] lets arrive:
+// normalised positions [1, K, 3].
+torch::Tensor ForwardSequence(UavLocModel& model, const WindowSequence& s,
+                              const torch::Tensor& mask) {
+  const AnchorBatch anchors = StackAnchors({TrackAnchors(s, 0, mask, model->config())});
+  return model->forward((s.latents * mask.unsqueeze(2)).unsqueeze(0), mask.unsqueeze(0), &anchors);
+}
+
+// Cross-entropy of the anchored head's candidate weights log_w [B, K, C + 1]
+// against the valid candidate nearest the truth [B, K, 3] if within `radius`
+// (normalised), else the free candidate; mean over the estimated windows.
+torch::Tensor SelectionLoss(const torch::Tensor& log_w, const AnchorBatch& anchors,
+                            const torch::Tensor& truth, const torch::Tensor& mask, double radius) {
+  const torch::Tensor d =
+      (anchors.candidates - truth.unsqueeze(-2))
+          .norm(2, -1)
+          .masked_fill(anchors.valid < 0.5, std::numeric_limits<float>::infinity());
+  const auto [nearest, index] = d.min(-1);
+  const torch::Tensor target =
+      torch::where(nearest < radius, index,
+                   torch::full_like(index, static_cast<std::int64_t>(kAnchorCandidates)));
+  const torch::Tensor w = EstimatedWindows(mask);
+  return -(log_w.gather(-1, target.unsqueeze(-1)).squeeze(-1) * w).sum() / w.sum().clamp_min(1.0);
+}
+
 double FusionValidationLoss(UavLocModel& model, const std::vector<WindowSequence>& val) {
   torch::NoGradGuard no_grad;
   model->eval();
   double sum = 0.0, count = 0.0;
   for (const WindowSequence& s : val) {
-    const torch::Tensor lat = s.latents.unsqueeze(0), mask = s.mask.unsqueeze(0);
-    const torch::Tensor y_hat = model->forward(lat, mask);
+    const torch::Tensor mask = s.mask.unsqueeze(0);
+    const torch::Tensor y_hat = ForwardSequence(model, s, s.mask);
     const torch::Tensor w = EstimatedWindows(mask);
     sum += ((y_hat - s.truth.unsqueeze(0)).square().sum(2) * w).sum().item<double>();
     count += w.sum().item<double>();
@@ -346,9 +396,15 @@ double FusionValidationLoss(UavLocModel& model, const std::vector<WindowSequence
 // A training batch: random crops of K windows from random episodes, with
 // random modality dropout (a modality missing for the whole crop, or in
 // single windows), never more than the data already lacks.
-FusionBatch DrawCrops(const std::vector<WindowSequence>& train, int batch, std::int64_t k,
-                      const TrainOptions& o, torch::Tensor& truth) {
+struct CropBatch {
+  FusionBatch fusion;
+  AnchorBatch anchors;
+  torch::Tensor truth;
+};
+CropBatch DrawCrops(const std::vector<WindowSequence>& train, int batch, std::int64_t k,
+                    const TrainOptions& o, const UavLocModelConfig& config) {
   std::vector<torch::Tensor> lat, mask, y;
+  std::vector<std::vector<AnchorWindow>> anchors;
   const torch::Tensor pick =
       torch::randint(static_cast<std::int64_t>(train.size()), {batch}, torch::kLong);
   for (int b = 0; b < batch; ++b) {
@@ -363,11 +419,11 @@ FusionBatch DrawCrops(const std::vector<WindowSequence>& train, int batch, std::
     if (keep.sum().item<double>() < 0.5) keep.fill_(1.0);  // never drop all three
     m = m * keep * (torch::rand({k, kModalityCount}) >= o.window_dropout).to(m.dtype());
     lat.push_back(s.latents.narrow(0, start, k) * m.unsqueeze(2));
+    anchors.push_back(TrackAnchors(s, start, m, config));
     mask.push_back(m);
     y.push_back(s.truth.narrow(0, start, k));
   }
-  truth = torch::stack(y);
-  return {torch::stack(lat), torch::stack(mask)};
+  return {{torch::stack(lat), torch::stack(mask)}, StackAnchors(anchors), torch::stack(y)};
 }
 
 UavLocModel TrainFusion(const std::vector<WindowSequence>& train,
@@ -392,16 +448,34 @@ UavLocModel TrainFusion(const std::vector<WindowSequence>& train,
       *model, o.stage2_max_epochs, o.stage2_patience, "train stage 2: fusion + Mamba", o.quiet,
       [&] {
         for (std::int64_t step = 0; step < steps; ++step) {
-          torch::Tensor truth;
-          const FusionBatch b = DrawCrops(train, o.stage2_batch, k, o, truth);
+          const CropBatch b = DrawCrops(train, o.stage2_batch, k, o, config);
           if (o.check_stop) o.check_stop();
           adam.zero_grad();
-          MaskedMse(model->forward(b.latents, b.mask), truth, b.mask).backward();
+          torch::Tensor log_w;
+          torch::Tensor loss =
+              MaskedMse(model->forward(b.fusion.latents, b.fusion.mask, &b.anchors, &log_w),
+                        b.truth, b.fusion.mask);
+          if (config.anchored && o.selection_weight > 0.0)
+            loss = loss + o.selection_weight *
+                              SelectionLoss(log_w, b.anchors, b.truth, b.fusion.mask,
+                                            o.selection_radius_m / config.position_scale_m);
+          loss.backward();
           adam.step();
         }
       },
       [&] { return FusionValidationLoss(model, val); },
-      [&](int) { SaveUavLocModel(model, checkpoint); }, report);
+      [&](int) { SaveUavLocModel(model, checkpoint); }, report,
+      [&, lr = o.stage2_lr, since_cut = 0](int since_best) mutable {
+        // Halve the learning rate after stage2_plateau_epochs without a
+        // better validation loss (counted from the last cut).
+        if (o.stage2_plateau_epochs <= 0 ||
+            std::min(since_best, ++since_cut) < o.stage2_plateau_epochs)
+          return;
+        lr *= 0.5;
+        since_cut = 0;
+        for (auto& group : adam.param_groups())
+          static_cast<torch::optim::AdamOptions&>(group.options()).lr(lr);
+      });
   report.seconds = SecondsSince(start);
   return model;
 }
@@ -418,7 +492,7 @@ Evaluation Evaluate(UavLocModel& model, const std::vector<WindowSequence>& seque
       torch::Tensor keep = torch::ones({1, kModalityCount});
       if (subset >= 0) keep.zero_(), keep[0][subset] = 1.0;
       const torch::Tensor mask = (s.mask * keep).unsqueeze(0);
-      const torch::Tensor y_hat = model->forward(s.latents.unsqueeze(0) * mask.unsqueeze(3), mask);
+      const torch::Tensor y_hat = ForwardSequence(model, s, mask[0]);
       const torch::Tensor w = EstimatedWindows(mask);
       sum += ((y_hat - s.truth.unsqueeze(0)).square().sum(2) * w).sum().item<double>();
       count += w.sum().item<double>();
@@ -476,6 +550,10 @@ void TrainOptions::Validate() const {
       modality_dropout >= 0 && modality_dropout <= 1 && window_dropout >= 0 && window_dropout <= 1,
       "modality_dropout and window_dropout", "must be in [0, 1]");
   require(d_model >= 1 && layers >= 1, "d_model and layers", "must be >= 1");
+  require(stage2_plateau_epochs >= 0, "stage2_plateau_epochs", "must be >= 0");
+  require(selection_weight >= 0 && std::isfinite(selection_weight) && selection_radius_m > 0 &&
+              std::isfinite(selection_radius_m),
+          "selection_weight and selection_radius_m", "must be finite, >= 0 and > 0");
 }
 
 TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& o, const ModelManifest& manifest,
@@ -513,6 +591,7 @@ TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& o, const ModelM
   config.window_s = o.window_s;
   config.d_model = o.d_model;
   config.layers = o.layers;
+  config.anchored = o.anchored;
   config.position_centre_m = norm.centre_m;
   config.position_scale_m = norm.scale_m;
   const TeAlign align(config.te_align());
@@ -560,6 +639,10 @@ std::string ReportJson(const TrainReport& r, const TrainOptions& o) {
   j["seed"] = o.seed;
   j["latent_dim"] = o.latent_dim;
   j["bottleneck"] = o.bottleneck == IbBottleneck::kIb ? "ib" : "mlp";
+  j["head"] = o.anchored ? "anchored" : "paper";
+  if (o.anchored)
+    j["selection_loss"] = {{"weight", o.selection_weight}, {"radius_m", o.selection_radius_m}};
+  j["stage2_plateau_epochs"] = o.stage2_plateau_epochs;
   j["learning_rate"] = {{"stage1", o.stage1_lr}, {"stage2", o.stage2_lr}};
   j["stage1_label_gate"] = {{"m", o.stage1_label_gate_m}, {"deg", o.stage1_label_gate_deg}};
   core::Json stages = core::Json::array();

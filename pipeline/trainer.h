@@ -57,6 +57,9 @@ struct TrainOptions {
   int stage2_sequence_windows = 60;  // K of a training crop
   int stage2_max_epochs = 150;
   int stage2_patience = 20;
+  // Halve the stage-2 learning rate after this many epochs without a better
+  // validation loss (0: never; 6 measured better, NOTES.md).
+  int stage2_plateau_epochs = 6;
   int stage2_min_steps_per_epoch = 20;
   double modality_dropout = 0.2;  // P(a modality is missing for a whole crop)
   double window_dropout = 0.1;    // P(a modality is missing in one window)
@@ -66,6 +69,16 @@ struct TrainOptions {
   // Edge network sizes (paper silent; DESIGN.md: d_state 16, d_conv 4, expand 2).
   int d_model = 64;
   int layers = 2;
+  // The edge head: anchored (default; pipeline/anchors.h, measured in
+  // NOTES.md) or the paper's plain linear head (false).
+  bool anchored = true;
+  // Anchored head: weight of the candidate-selection loss added to the MSE,
+  // the cross-entropy of the candidate weights against the valid candidate
+  // nearest the truth when it is within selection_radius_m, else the free
+  // one (it teaches the choice directly; the MSE alone left the weights
+  // spread, NOTES.md). 0: MSE only.
+  double selection_weight = 1.0;
+  double selection_radius_m = 2.0;
 
   // Throws std::invalid_argument naming the first bad field.
   void Validate() const;

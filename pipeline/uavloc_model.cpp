@@ -34,6 +34,7 @@ void Visit(V& v, UavLocModelConfig& c) {
   v("d_state", c.d_state, Rule::Range(1, 4096));
   v("d_conv", c.d_conv, Rule::Range(1, 256));
   v("expand", c.expand, Rule::Range(1, 64));
+  v("anchored", c.anchored);
   v("position_centre_m", c.position_centre_m);
   v("position_scale_m", c.position_scale_m, Rule::Positive());
 }
@@ -52,6 +53,7 @@ MambaRegressorOptions UavLocModelConfig::regressor() const {
   MambaRegressorOptions r;
   r.input_dim = kModalityCount * latent_dim;  // Eq. (26): the concatenation
   r.output_dim = 3;
+  if (anchored) r.input_dim += kAnchorFeatures, r.output_dim += kAnchorCandidates + 1 + 3;
   r.layers = layers;
   r.mamba.d_model = d_model;
   r.mamba.d_state = d_state;
@@ -87,7 +89,9 @@ const UavLocModelConfig& Validated(const UavLocModelConfig& config) {
 }  // namespace
 
 UavLocModelImpl::UavLocModelImpl(const UavLocModelConfig& config)
-    : config_(Validated(config)), te_align_(config.te_align()) {
+    : config_(Validated(config)),
+      te_align_(config.te_align()),
+      tracker_(config.window_s, config.position_centre_m, config.position_scale_m) {
   madw = register_module("madw", Madw(kModalityCount, config_.latent_dim, config_.score_hidden));
   mica = register_module(
       "mica", Mica(kModalityCount, config_.latent_dim, config_.score_hidden, config_.lambda_init));
@@ -102,7 +106,8 @@ torch::Tensor UavLocModelImpl::Fuse(const torch::Tensor& latents, const torch::T
   return fused.fused.flatten(1);
 }
 
-torch::Tensor UavLocModelImpl::forward(const torch::Tensor& latents, const torch::Tensor& mask) {
+torch::Tensor UavLocModelImpl::forward(const torch::Tensor& latents, const torch::Tensor& mask,
+                                       const AnchorBatch* anchors, torch::Tensor* log_weights) {
   const int64_t z = config_.latent_dim;
   TORCH_CHECK(latents.dim() == 4 && latents.size(2) == kModalityCount && latents.size(3) == z,
               "UavLocModel: latents must be [B, K, ", kModalityCount, ", ", z, "], got ",
@@ -112,18 +117,50 @@ torch::Tensor UavLocModelImpl::forward(const torch::Tensor& latents, const torch
               "UavLocModel: mask must be [B, K, ", kModalityCount, "], got ", mask.sizes());
   const int64_t batch = latents.size(0);
   const int64_t windows = latents.size(1);
-  const torch::Tensor fused =
-      Fuse(latents.reshape({batch * windows, kModalityCount, z}),
-           mask.reshape({batch * windows, kModalityCount}).to(latents.dtype()));
-  return regressor(fused.reshape({batch, windows, kModalityCount * z}));
+  torch::Tensor fused = Fuse(latents.reshape({batch * windows, kModalityCount, z}),
+                             mask.reshape({batch * windows, kModalityCount}).to(latents.dtype()))
+                            .reshape({batch, windows, kModalityCount * z});
+  if (!config_.anchored) return regressor(fused);
+  TORCH_CHECK(anchors != nullptr, "UavLocModel: an anchored model needs the windows' anchors");
+  TORCH_CHECK(anchors->features.sizes() ==
+                  torch::IntArrayRef({batch, windows, static_cast<int64_t>(kAnchorFeatures)}),
+              "UavLocModel: anchor features must be [B, K, ", kAnchorFeatures, "], got ",
+              anchors->features.sizes());
+  return Anchored(regressor(torch::cat({fused, anchors->features}, 2)), anchors->candidates,
+                  anchors->valid, log_weights);
+}
+
+torch::Tensor UavLocModelImpl::Anchored(const torch::Tensor& head, const torch::Tensor& candidates,
+                                        const torch::Tensor& valid,
+                                        torch::Tensor* log_weights) const {
+  const int64_t c = kAnchorCandidates;
+  TORCH_CHECK(candidates.dim() == head.dim() + 1 && candidates.size(-2) == c &&
+                  candidates.size(-1) == 3 && valid.size(-1) == c,
+              "UavLocModel: anchor candidates must be [..., ", c, ", 3], got ", candidates.sizes());
+  const torch::Tensor residual = head.narrow(-1, 0, 3);
+  const torch::Tensor logits = head.narrow(-1, 3, c + 1);
+  const torch::Tensor free = head.narrow(-1, 3 + c + 1, 3);
+  // The free candidate is always valid.
+  std::vector<int64_t> one_shape = valid.sizes().vec();
+  one_shape.back() = 1;
+  const torch::Tensor allowed = torch::cat({valid, torch::ones(one_shape, valid.options())}, -1);
+  const torch::Tensor log_w = torch::log_softmax(
+      logits.masked_fill(allowed < 0.5, -std::numeric_limits<float>::infinity()), -1);
+  if (log_weights) *log_weights = log_w;
+  const torch::Tensor weights = log_w.exp();
+  const torch::Tensor w = weights.narrow(-1, 0, c);
+  return (w.unsqueeze(-1) * candidates).sum(-2) + w.sum(-1, true) * residual +
+         weights.narrow(-1, c, 1) * free;
 }
 
 void UavLocModelImpl::ResetState() {
   state_ = regressor->InitialState(1);
   last_window_.reset();
+  tracker_.Reset();
 }
 
-torch::Tensor UavLocModelImpl::StepAligned(const AlignedWindow& window) {
+torch::Tensor UavLocModelImpl::StepAligned(const AlignedWindow& window,
+                                           const AnchorWindow& anchors) {
   const int64_t z = config_.latent_dim;
   torch::Tensor latents = torch::empty({1, kModalityCount, z});
   torch::Tensor mask = torch::empty({1, kModalityCount});
@@ -134,7 +171,10 @@ torch::Tensor UavLocModelImpl::StepAligned(const AlignedWindow& window) {
     std::copy(t.begin(), t.end(), latent_data + m * z);
     mask_data[m] = window.mask[static_cast<std::size_t>(m)];
   }
-  return regressor->Step(Fuse(latents, mask), &state_);
+  if (!config_.anchored) return regressor->Step(Fuse(latents, mask), &state_);
+  const AnchorBatch a = StackAnchors({{anchors}});
+  const torch::Tensor x = torch::cat({Fuse(latents, mask), a.features[0]}, 1);
+  return Anchored(regressor->Step(x, &state_), a.candidates[0], a.valid[0]);
 }
 
 Eigen::Vector3d UavLocModelImpl::Step(const WindowInputs& window) {
@@ -151,11 +191,16 @@ Eigen::Vector3d UavLocModelImpl::Step(const WindowInputs& window) {
     } else {
       AlignedWindow empty;
       for (auto& t : empty.latent) t.assign(static_cast<std::size_t>(config_.latent_dim), 0.0f);
-      for (std::int64_t g = 0; g < gap; ++g) StepAligned(empty);
+      for (std::int64_t g = 0; g < gap; ++g) {
+        empty.window = *last_window_ + 1 + g;
+        StepAligned(empty, tracker_.Update(empty.window, {}));
+      }
     }
   }
+  if (last_window_ && window.window - *last_window_ - 1 > kMaxGapWindows) tracker_.Reset();
   last_window_ = window.window;
-  const torch::Tensor p = PositionInMetres(StepAligned(aligned)).to(torch::kFloat64);
+  const AnchorWindow anchors = tracker_.Update(window.window, te_align_.LatestAnchors(window));
+  const torch::Tensor p = PositionInMetres(StepAligned(aligned, anchors)).to(torch::kFloat64);
   const double* d = p.data_ptr<double>();
   return {d[0], d[1], d[2]};
 }
@@ -182,6 +227,7 @@ void UavLocModelImpl::SetPositionNormalization(const Eigen::Vector3d& centre_m, 
   c.position_scale_m = scale_m;
   c.Validate();
   config_ = c;
+  tracker_ = AnchorTracker(c.window_s, centre_m, scale_m);
 }
 
 FusionBatch StackWindows(const std::vector<std::vector<AlignedWindow>>& sequences) {
@@ -216,6 +262,33 @@ FusionBatch StackWindows(const std::vector<std::vector<AlignedWindow>>& sequence
     }
   }
   return batch;
+}
+
+AnchorBatch StackAnchors(const std::vector<std::vector<AnchorWindow>>& sequences) {
+  if (sequences.empty() || sequences.front().empty())
+    throw std::invalid_argument("StackAnchors: need at least one non-empty sequence");
+  const auto b = static_cast<int64_t>(sequences.size());
+  const auto k = static_cast<int64_t>(sequences.front().size());
+  const int64_t c = kAnchorCandidates;
+  AnchorBatch out;
+  out.features = torch::empty({b, k, kAnchorFeatures});
+  out.candidates = torch::empty({b, k, c, 3});
+  out.valid = torch::empty({b, k, c});
+  float* f = out.features.data_ptr<float>();
+  float* p = out.candidates.data_ptr<float>();
+  float* v = out.valid.data_ptr<float>();
+  for (const std::vector<AnchorWindow>& seq : sequences) {
+    if (static_cast<int64_t>(seq.size()) != k)
+      throw std::invalid_argument("StackAnchors: sequences differ in length");
+    for (const AnchorWindow& w : seq) {
+      f = std::copy(w.features.begin(), w.features.end(), f);
+      for (int i = 0; i < c; ++i) {
+        for (int j = 0; j < 3; ++j) *p++ = static_cast<float>(w.candidates[i][j]);
+        *v++ = w.valid[i];
+      }
+    }
+  }
+  return out;
 }
 
 std::string SidecarPath(const std::string& path) { return path + ".json"; }

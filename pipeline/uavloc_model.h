@@ -24,6 +24,7 @@
 #include <string>
 #include <vector>
 
+#include "pipeline/anchors.h"
 #include "pipeline/madw.h"
 #include "pipeline/mamba.h"
 #include "pipeline/mica.h"
@@ -49,6 +50,13 @@ struct UavLocModelConfig {
   int d_state = 16;
   int d_conv = 4;
   int expand = 2;
+  // The paper's head regresses the position from the Mamba output alone.
+  // Anchored (pipeline/anchors.h): the anchor features join t^f at the Mamba
+  // input, and the head gives a residual r, logits over the window's valid
+  // candidates c_i plus a free one, and the free one's position a (the paper
+  // head's absolute regression, for windows with no good candidate):
+  //   p = sum_i w_i (c_i + r) + w_free a,  w = softmax(logits).
+  bool anchored = false;
   // Output normalisation: the head predicts (p - centre) / scale, p in
   // world ENU metres.
   Eigen::Vector3d position_centre_m = Eigen::Vector3d::Zero();
@@ -71,9 +79,15 @@ class UavLocModelImpl : public torch::nn::Module {
   explicit UavLocModelImpl(const UavLocModelConfig& config);
 
   // latents: t^{m,e}(k) [B, K, M, z] (M = 3 in Modality order); mask:
-  // [B, K, M], 1 available, 0 missing. Returns the normalised positions
-  // [B, K, 3]. Each sequence starts from a zero Mamba state.
-  torch::Tensor forward(const torch::Tensor& latents, const torch::Tensor& mask);
+  // [B, K, M], 1 available, 0 missing; anchors (anchored models only, else
+  // ignored): the windows' AnchorWindows as StackAnchors gives them. Returns
+  // the normalised positions [B, K, 3]. Each sequence starts from a zero
+  // Mamba state. Throws c10::Error for wrong shapes or missing anchors. An
+  // anchored model sets *log_weights (when given) to the log of the
+  // candidates' weights [B, K, C + 1] (last: the free one; -inf: invalid).
+  torch::Tensor forward(const torch::Tensor& latents, const torch::Tensor& mask,
+                        const struct AnchorBatch* anchors = nullptr,
+                        torch::Tensor* log_weights = nullptr);
 
   // MADW, MICA and concatenation of independent windows: [N, M, z], [N, M]
   // -> t^f [N, M z].
@@ -103,10 +117,14 @@ class UavLocModelImpl : public torch::nn::Module {
   MambaRegressor regressor{nullptr};
 
  private:
-  torch::Tensor StepAligned(const AlignedWindow& window);
+  torch::Tensor StepAligned(const AlignedWindow& window, const AnchorWindow& anchors);
+  // The head's output [..., 3 + C + 1] -> position [..., 3] (anchored models).
+  torch::Tensor Anchored(const torch::Tensor& head, const torch::Tensor& candidates,
+                         const torch::Tensor& valid, torch::Tensor* log_weights = nullptr) const;
 
   UavLocModelConfig config_;
   TeAlign te_align_;
+  AnchorTracker tracker_;
   MambaRegressorState state_;
   std::optional<std::int64_t> last_window_;
 };
@@ -120,6 +138,14 @@ struct FusionBatch {
   torch::Tensor mask;
 };
 FusionBatch StackWindows(const std::vector<std::vector<AlignedWindow>>& sequences);
+
+// AnchorWindows of B sequences of K windows: features [B, K, F], candidates
+// [B, K, C, 3], valid [B, K, C] (float32). Throws std::invalid_argument if the
+// sequences differ in length or are empty.
+struct AnchorBatch {
+  torch::Tensor features, candidates, valid;
+};
+AnchorBatch StackAnchors(const std::vector<std::vector<AnchorWindow>>& sequences);
 
 std::string SidecarPath(const std::string& path);  // path + ".json"
 // Throws std::runtime_error naming the file when it cannot be written.

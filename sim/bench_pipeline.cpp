@@ -176,8 +176,8 @@ int BenchPipeline(bool quiet, std::ostream& out) {
         t, kEncodeTarget, "90 ms");
   }
 
-  {
-    const auto edge = pipeline::EdgeLocalizer::Create(kLatentDim, kWindowS);
+  for (const bool anchored : {false, true}) {
+    const auto edge = pipeline::EdgeLocalizer::Create(kLatentDim, kWindowS, anchored);
     // Frames per window of the default scenario's sensors: 30, 10, 15 Hz.
     constexpr std::array<int, pipeline::kModalityCount> kFramesPerWindow{6, 2, 3};
     pipeline::WindowInputs window;
@@ -187,6 +187,11 @@ int BenchPipeline(bool quiet, std::ostream& out) {
         pipeline::LatentFrame f;
         f.latent.resize(kLatentDim);
         for (float& v : f.latent) v = static_cast<float>(rng.Normal());
+        // What the nodes send with their latents for an anchored model.
+        f.anchor.kind = m == 0 ? pipeline::GeometricAnchor::Kind::kRay
+                               : pipeline::GeometricAnchor::Kind::kPoint;
+        f.anchor.origin_w = {rng.Normal(), rng.Normal(), 30.0 + rng.Normal()};
+        f.anchor.range_m = 40.0;
         window.frames[m].push_back(std::move(f));
       }
     const auto next_window = [&] {
@@ -194,10 +199,13 @@ int BenchPipeline(bool quiet, std::ostream& out) {
       const double start_s = static_cast<double>(window.window - 1) * kWindowS;
       for (int m = 0; m < pipeline::kModalityCount; ++m)
         for (int i = 0; i < kFramesPerWindow[m]; ++i)
-          window.frames[m][i].t_s = start_s + kWindowS * (i + 0.5) / kFramesPerWindow[m];
+          window.frames[m][i].anchor.t_s = window.frames[m][i].t_s =
+              start_s + kWindowS * (i + 0.5) / kFramesPerWindow[m];
     };
     const Timing t = Time(next_window, [&] { edge->OnWindow(window); });
-    Row(out, "edge window 6+2+3 latents", t, "<= 1", "-");
+    Row(out,
+        std::string("edge window 6+2+3 latents, ") + (anchored ? "anchored head" : "paper head"), t,
+        "<= 1", "-");
   }
   return 0;
 }

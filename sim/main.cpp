@@ -110,9 +110,10 @@ const char* kSweepHelp =
 
 const char* kTrainHelp =
     "usage: uavsim train SCENARIO.json [--out MODEL] [--quick] [--seed N] [--episodes N]\n"
-    "                    [--episode-s S] [--lr RATE] [--bottleneck ib|mlp] [--threads N]\n"
-    "                    [--data FILE] [--label-gate M,DEG] [--set /ptr=value] [--force] "
-    "[--quiet]\n"
+    "                    [--episode-s S] [--lr RATE] [--bottleneck ib|mlp] [--head H]\n"
+    "                    [--selection-weight W] [--plateau N]\n"
+    "                    [--threads N] [--data FILE] [--label-gate M,DEG] [--set /ptr=value]\n"
+    "                    [--force] [--quiet]\n"
     "\n"
     "Generates training data by simulation and trains the UAVLoc model with LibTorch on\n"
     "the CPU. Each episode is the scenario with its own target trajectory (orbit,\n"
@@ -131,6 +132,12 @@ const char* kTrainHelp =
     "  --lr RATE      Adam's learning rate for both stages (default 1e-3; see NOTES.md)\n"
     "  --bottleneck B ib (default: the paper's IB-CC head, mu/sigma and KL) or mlp (its\n"
     "                 MLP baseline of equal depth and parameter count, no KL)\n"
+    "  --head H       anchored (default: the Mamba output picks among the nodes' geometric\n"
+    "                 anchors and adds a residual; see NOTES.md) or paper (its linear head)\n"
+    "  --selection-weight W  anchored head: weight of the candidate-selection loss\n"
+    "                 (default 1; 0: position MSE only)\n"
+    "  --plateau N    halve the stage-2 learning rate after N epochs without a better\n"
+    "                 validation loss (default 6; 0: never)\n"
     "  --threads N    LibTorch threads (default 1); results depend on it\n"
     "  --data FILE    the simulated episodes: read FILE if it exists (no simulation),\n"
     "                 else simulate and write it (train again without simulating)\n"
@@ -282,6 +289,13 @@ int Run(int argc, char** argv) {
       }
       std::printf("\n");
     }
+    if (!summary.rmse_common_m.empty()) {
+      std::printf("RMSE (m) over the %llu windows every method estimated:",
+                  static_cast<unsigned long long>(summary.common_windows));
+      for (const auto& [method, rmse] : summary.rmse_common_m)
+        std::printf(" %s %.3f", method.c_str(), rmse);
+      std::printf("\n");
+    }
   }
   return kExitOk;
 }
@@ -296,10 +310,11 @@ std::uint64_t UnsignedOption(const std::string& cmd, const std::string& name, co
 }
 
 int Train(int argc, char** argv) {
-  const ParsedArgs a = Parse("train", argc, argv, 2,
-                             {"--out", "--seed", "--episodes", "--episode-s", "--threads", "--set",
-                              "--data", "--lr", "--bottleneck", "--label-gate"},
-                             {"--quick", "--quiet", "--force", "--help"});
+  const ParsedArgs a =
+      Parse("train", argc, argv, 2,
+            {"--out", "--seed", "--episodes", "--episode-s", "--threads", "--set", "--data", "--lr",
+             "--bottleneck", "--label-gate", "--head", "--selection-weight", "--plateau"},
+            {"--quick", "--quiet", "--force", "--help"});
   if (a.Has("--help")) return std::cout << kTrainHelp, kExitOk;
   const std::string& file = OneScenario("train", a);
   uavsim::sim::TrainCommand c;
@@ -324,6 +339,20 @@ int Train(int argc, char** argv) {
     if (*v != "ib" && *v != "mlp")
       throw UsageError("uavsim train: --bottleneck expects ib or mlp, got '" + *v + "'");
     c.mlp_bottleneck = *v == "mlp";
+  }
+  if (auto v = a.Value("--selection-weight")) {
+    char* end = nullptr;
+    c.selection_weight = std::strtod(v->c_str(), &end);
+    if (v->empty() || *end != '\0' || !(c.selection_weight >= 0.0 && c.selection_weight <= 100.0))
+      throw UsageError("uavsim train: --selection-weight expects a number in [0, 100], got '" + *v +
+                       "'");
+  }
+  if (auto v = a.Value("--plateau"))
+    c.plateau_epochs = static_cast<int>(UnsignedOption("train", "--plateau", *v, 10000));
+  if (auto v = a.Value("--head")) {
+    if (*v != "anchored" && *v != "paper")
+      throw UsageError("uavsim train: --head expects anchored or paper, got '" + *v + "'");
+    c.paper_head = *v == "paper";
   }
   if (auto v = a.Value("--label-gate")) {
     char* end = nullptr;

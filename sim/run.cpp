@@ -16,6 +16,7 @@
 #include "channel/packet.h"
 #include "channel/rain_attenuation.h"
 #include "channel/uplink.h"
+#include "pipeline/anchors.h"
 #include "pipeline/camera_preprocessor.h"
 #include "pipeline/ekf.h"
 #include "pipeline/lidar_preprocessor.h"
@@ -111,7 +112,10 @@ std::unique_ptr<pipeline::UavLocModelFiles> LoadModel(const Scenario& s, const s
     std::cerr << "uavsim: warning: the model " << path << " was trained for scenario \""
               << m.scenario << "\" with another world or node layout; its estimates may be poor ("
               << how << ")\n";
-  info = {{"path", path}, {"trained_for", m.scenario}, {"same_layout", same_layout}};
+  info = {{"path", path},
+          {"trained_for", m.scenario},
+          {"same_layout", same_layout},
+          {"head", model->edge().anchored() ? "anchored" : "paper"}};
   return model;
 }
 
@@ -269,7 +273,9 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
         pipeline::WindowInputs& w = pending[k];
         w.window = k;
         w.frames[static_cast<int>(m.modality)].push_back(
-            {core::ToSeconds(m.t_capture_ns), content.latent});
+            {core::ToSeconds(m.t_capture_ns), content.latent,
+             content.camera ? pipeline::AnchorOf(*content.camera)
+                            : pipeline::AnchorOf(*content.points)});
       }
     });
     link->SetLossCallback(
@@ -284,7 +290,11 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
   std::map<std::string, std::uint64_t> frames;
   for (const char* m : kModalities)
     frames[m] = 0, bytes.raw[m] = 0, bytes.preprocessed[m] = 0, bytes.compressed[m] = 0;
-  const std::uint32_t message_bytes = channel::LatentMessageBytes(s.pipeline.latent_dim);
+  // An anchored model's nodes send their geometric anchor too.
+  const auto message_bytes = [&](channel::Modality m) {
+    return channel::LatentMessageBytes(s.pipeline.latent_dim) +
+           (uavloc && uavloc->edge().anchored() ? pipeline::AnchorBytes(m) : 0);
+  };
   if (o.collect) {
     o.collect->window_s = s.pipeline.window_s;
     o.collect->samples.clear();
@@ -381,7 +391,8 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
           // The latent travels, not the crops: the edge's filter needs the geometry only.
           if (content->camera)
             content->camera->crop_left.clear(), content->camera->crop_right.clear();
-          const std::uint32_t bytes_sent = found ? message_bytes : channel::kMessageHeaderBytes;
+          const std::uint32_t bytes_sent =
+              found ? message_bytes(nd.modality) : channel::kMessageHeaderBytes;
           ++frames[modality];
           bytes.raw[modality] += raw;
           bytes.preprocessed[modality] += PreprocessedBytes(*content);
@@ -415,7 +426,7 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
       channel::SnrGridDb(s.outputs.snr_db.from, s.outputs.snr_db.to, s.outputs.snr_db.step),
       core::RngStream(s.seed, "base_station/downlink"));
   results::CsvTable estimates({"t_s", "method", "x_m", "y_m", "z_m"});
-  std::map<std::string, RmseAccumulator> rmse;
+  std::map<std::string, RmseAccumulator> rmse, rmse_common;
   const core::SimTime allowance = core::Seconds(s.pipeline.late_allowance_s);
   std::uint64_t windows = 0;  // deadlines the edge estimated at
   core::PeriodicProcess window_timer(
@@ -456,6 +467,8 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
                             FormatFixed(p.y(), 6), FormatFixed(p.z(), 6)});
           rmse[method].Add(p - truth_m);
         }
+        if (s.pipeline.methods.size() >= 2 && estimated.size() == s.pipeline.methods.size())
+          for (const auto& [method, p] : estimated) rmse_common[method].Add(p - truth_m);
         world.scene().SetTime(t_s);
         std::map<std::string, Eigen::Vector3d> steering;  // the ablations steer no beam
         for (const std::string& beam : steered)
@@ -486,6 +499,10 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
   for (const std::string& method : s.pipeline.methods) rmse[method];
   for (const auto& [method, acc] : rmse)
     summary.rmse_m[method] = acc.count ? std::optional<double>(acc.value()) : std::nullopt;
+  for (const auto& [method, acc] : rmse_common) {
+    summary.rmse_common_m[method] = acc.value();
+    summary.common_windows = acc.count;
+  }
   if (o.collect) return summary;
 
   dir->WriteText("truth.csv", truth.str());
@@ -516,6 +533,11 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
   metrics["rmse_m"] = rmse_json;
   metrics["windows"] = windows;
   metrics["estimated_windows"] = windows_json;
+  // Methods compared on the same windows: those every method estimated.
+  metrics["common_windows"] = summary.common_windows;
+  core::Json common_json = core::Json::object();
+  for (const auto& [method, value] : summary.rmse_common_m) common_json[method] = value;
+  metrics["rmse_common_m"] = common_json;
   if (uavloc) metrics["uavloc_model"] = model_info;
   core::Json modalities = core::Json::object();
   for (const auto& [m, n] : frames) modalities[m] = {{"frames", n}};

@@ -37,6 +37,11 @@ struct RunSummary {
   // Per method that ran: RMSE over the windows it estimated, or nothing if
   // it never produced an estimate.
   std::map<std::string, std::optional<double>> rmse_m;
+  // The same over the windows every method estimated (methods start at
+  // different windows: the EKF waits for a confirmed track), when there are
+  // two or more methods and such windows.
+  std::map<std::string, double> rmse_common_m;
+  std::uint64_t common_windows = 0;
 };
 
 // Throws core::UsageError (exists, not forced), std::runtime_error (I/O) or

@@ -314,7 +314,8 @@ Json ResolvedJson(const Scenario& s) { return core::ToJson(s); }
 
 std::string LayoutHash(const Scenario& s) {
   const core::Json j = ResolvedJson(s);
-  const std::string text = j.at("world").dump() + j.at("nodes").dump();
+  const std::string text =
+      j.at("world").dump() + j.at("nodes").dump() + j.at("pipeline").at("preprocess").dump();
   std::uint64_t h = 1469598103934665603ull;  // FNV-1a 64
   for (unsigned char ch : text) h = (h ^ ch) * 1099511628211ull;
   char buf[17];

@@ -122,8 +122,9 @@ Scenario ScenarioFromJson(const core::Json& doc, const std::string& file,
 // The resolved scenario: every key, defaults filled.
 core::Json ResolvedJson(const Scenario& s);
 
-// Fingerprint of what a trained model depends on: the world and the nodes as
-// resolved (16 hex digits of FNV-1a over their JSON).
+// Fingerprint of what a trained model depends on: the world, the nodes and
+// the nodes' pre-processing as resolved (16 hex digits of FNV-1a over their
+// JSON).
 std::string LayoutHash(const Scenario& s);
 
 }  // namespace uavsim::sim

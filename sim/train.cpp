@@ -71,11 +71,12 @@ core::Json DrawTrajectory(const core::TrajectoryConfig& limits, const FlightRegi
     }
     case 1: {
       const double ax = rng.Uniform(1.0, 2.4) * h_xy, ay = rng.Uniform(0.6, 1.6) * h_xy;
-      // Gerono lemniscate: peak speed <= w sqrt(A^2 + B^2), peak accel <= w^2 sqrt(A^2 + 4 B^2)
-      // with A = ax / 2, B = ay / 2; choose the period so both hold.
+      // Gerono lemniscate x = A sin wt, y = B sin 2wt (A = ax / 2, B = ay / 2;
+      // sim/core/trajectory.cpp): speed <= w sqrt(A^2 + 4 B^2), acceleration
+      // <= w^2 sqrt(A^2 + 16 B^2); choose the period so both hold.
       const double a = ax / 2, b = ay / 2;
-      const double w =
-          std::min(0.9 * v_max / std::hypot(a, b), std::sqrt(0.9 * a_max / std::hypot(a, 2 * b)));
+      const double w = std::min(0.9 * v_max / std::hypot(a, 2 * b),
+                                std::sqrt(0.9 * a_max / std::hypot(a, 4 * b)));
       const double period = std::max(2 * M_PI / w, rng.Uniform(20.0, 50.0));
       t.update({{"type", "figure8"},
                 {"center_m", Vec(centre)},
@@ -195,6 +196,9 @@ pipeline::TrainReport RunTraining(const Scenario& base, const TrainCommand& c) {
   }
   if (c.learning_rate > 0) t.stage1_lr = t.stage2_lr = c.learning_rate;
   if (c.mlp_bottleneck) t.bottleneck = pipeline::IbBottleneck::kMlp;
+  t.anchored = !c.paper_head;
+  if (c.selection_weight >= 0) t.selection_weight = c.selection_weight;
+  if (c.plateau_epochs >= 0) t.stage2_plateau_epochs = c.plateau_epochs;
   t.stage1_label_gate_m = c.label_gate_m;
   t.stage1_label_gate_deg = c.label_gate_deg;
   if (c.episodes > 0) plan.episodes = c.episodes;

@@ -3,9 +3,11 @@
 // training run, save/load, determinism and the torch-free facade.
 #include <torch/torch.h>
 
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -46,6 +48,66 @@ WindowInputs RandomWindow(std::int64_t k, int z, double drop, torch::Generator& 
     }
   }
   return w;
+}
+
+UavLocModelConfig AnchoredConfig(int z = 8) {
+  UavLocModelConfig c = SmallConfig(z);
+  c.anchored = true;
+  return c;
+}
+
+// Anchors of B sequences of K windows as StackAnchors lays them out: random
+// features and candidates, each candidate valid with probability p_valid.
+AnchorBatch RandomAnchors(int64_t b, int64_t k, double p_valid) {
+  AnchorBatch a;
+  a.features = torch::randn({b, k, kAnchorFeatures});
+  a.candidates = torch::randn({b, k, kAnchorCandidates, 3});
+  a.valid = torch::bernoulli(torch::full({b, k, kAnchorCandidates}, p_valid));
+  return a;
+}
+
+AnchorBatch Clone(const AnchorBatch& a) {
+  return {a.features.clone(), a.candidates.clone(), a.valid.clone()};
+}
+
+Eigen::Vector3d RandomVector(torch::Generator& gen) {
+  const torch::Tensor t = torch::randn({3}, gen).to(torch::kFloat64);
+  return {t[0].item<double>(), t[1].item<double>(), t[2].item<double>()};
+}
+
+// RandomWindow whose frames carry anchors around `centre_m` (spread `spread_m`):
+// camera frames a ray (none, as if nothing was detected, with probability
+// 0.2), LiDAR and radar frames a point.
+WindowInputs RandomAnchoredWindow(std::int64_t k, int z, double drop,
+                                  const Eigen::Vector3d& centre_m, double spread_m,
+                                  torch::Generator& gen) {
+  WindowInputs w = RandomWindow(k, z, drop, gen);
+  for (int m = 0; m < kModalityCount; ++m)
+    for (LatentFrame& f : w.frames[static_cast<std::size_t>(m)]) {
+      if (m == static_cast<int>(Modality::kCamera)) {
+        if (torch::rand({1}, gen).item<double>() < 0.2) continue;
+        f.anchor.kind = GeometricAnchor::Kind::kRay;
+        f.anchor.origin_w = centre_m + 2.0 * spread_m * RandomVector(gen);
+        const Eigen::Vector3d target = centre_m + spread_m * RandomVector(gen);
+        f.anchor.direction_w = (target - f.anchor.origin_w).normalized();
+      } else {
+        f.anchor.kind = GeometricAnchor::Kind::kPoint;
+        f.anchor.origin_w = centre_m + spread_m * RandomVector(gen);
+      }
+    }
+  return w;
+}
+
+// The head's raw output [B, K, 3 + C + 1] for the given inputs, the way an
+// anchored forward feeds the regressor: [t^f, anchor features].
+torch::Tensor HeadOutput(UavLocModel& model, const torch::Tensor& latents,
+                         const torch::Tensor& mask, const AnchorBatch& anchors) {
+  const int64_t b = latents.size(0), k = latents.size(1), z = latents.size(3);
+  const torch::Tensor fused =
+      model
+          ->Fuse(latents.reshape({b * k, kModalityCount, z}), mask.reshape({b * k, kModalityCount}))
+          .reshape({b, k, kModalityCount * z});
+  return model->regressor(torch::cat({fused, anchors.features}, 2));
 }
 
 }  // namespace
@@ -106,6 +168,258 @@ TEST_CASE("UavLocModel: the online Step equals the batch forward on aligned wind
       worst = std::max(
           worst, std::abs(metres[0][k][i].item<double>() - online[static_cast<std::size_t>(k)][i]));
   CHECK(worst < 1e-5 * 20.0);  // 1e-5 in normalised units
+}
+
+TEST_CASE("UavLocModel anchored: shapes, and forward needs the anchors", "[pipeline]") {
+  InitTorch(1, 31);
+  UavLocModel model(AnchoredConfig(8));
+  CHECK(model->regressor->embed->weight.sizes() ==
+        torch::IntArrayRef({32, 3 * 8 + kAnchorFeatures}));
+  CHECK(model->regressor->head->weight.sizes() ==
+        torch::IntArrayRef({3 + kAnchorCandidates + 1 + 3, 32}));
+  const torch::Tensor latents = torch::randn({4, 10, 3, 8});
+  const torch::Tensor mask = torch::bernoulli(torch::full({4, 10, 3}, 0.7));
+  const AnchorBatch anchors = RandomAnchors(4, 10, 0.5);
+  CHECK(model(latents, mask, &anchors).sizes() == torch::IntArrayRef({4, 10, 3}));
+  CHECK_THROWS_AS(model(latents, mask), c10::Error);
+  CHECK_THROWS_AS(model->forward(latents, mask, nullptr), c10::Error);
+  AnchorBatch short_features = Clone(anchors);
+  short_features.features = short_features.features.narrow(2, 0, kAnchorFeatures - 1);
+  CHECK_THROWS_AS(model(latents, mask, &short_features), c10::Error);
+  const AnchorBatch fewer_windows = RandomAnchors(4, 9, 0.5);
+  CHECK_THROWS_AS(model(latents, mask, &fewer_windows), c10::Error);
+
+  // A plain model ignores anchors.
+  UavLocModel plain(SmallConfig(8));
+  CHECK(torch::equal(plain(latents, mask, &anchors), plain(latents, mask)));
+}
+
+TEST_CASE("UavLocModel anchored: the output is the softmax mix of the valid candidates plus r",
+          "[pipeline]") {
+  InitTorch(1, 32);
+  UavLocModel model(AnchoredConfig(8));
+  torch::NoGradGuard no_grad;
+  const int64_t b = 3, k = 7, c = kAnchorCandidates;
+  const torch::Tensor latents = torch::randn({b, k, 3, 8});
+  const torch::Tensor mask = torch::bernoulli(torch::full({b, k, 3}, 0.7));
+  AnchorBatch anchors = RandomAnchors(b, k, 0.5);
+  anchors.valid[0][0].fill_(1.0f);  // one window with every candidate,
+  anchors.valid[0][1].fill_(0.0f);  // one with none
+  const torch::Tensor out = model(latents, mask, &anchors);
+  const torch::Tensor head = HeadOutput(model, latents, mask, anchors).to(torch::kFloat64);
+  REQUIRE(head.sizes() == torch::IntArrayRef({b, k, 3 + c + 1 + 3}));
+  double worst = 0.0;
+  for (int64_t s = 0; s < b; ++s)
+    for (int64_t w = 0; w < k; ++w) {
+      // p = (sum_i e^{l_i} (c_i + r) + e^{l_free} a) / (e^{l_free} + sum_i
+      // e^{l_i}), i over the valid candidates; r = head[0:3], a the free
+      // candidate's position at head[3 + c + 1:].
+      const double free_weight = std::exp(head[s][w][3 + c].item<double>());
+      double total = free_weight;
+      Eigen::Vector3d mix = Eigen::Vector3d::Zero();
+      for (int j = 0; j < 3; ++j) mix[j] = free_weight * head[s][w][3 + c + 1 + j].item<double>();
+      for (int64_t i = 0; i < c; ++i) {
+        if (anchors.valid[s][w][i].item<float>() < 0.5f) continue;
+        const double e = std::exp(head[s][w][3 + i].item<double>());
+        total += e;
+        for (int j = 0; j < 3; ++j)
+          mix[j] +=
+              e * (anchors.candidates[s][w][i][j].item<double>() + head[s][w][j].item<double>());
+      }
+      for (int j = 0; j < 3; ++j) {
+        const double expected = mix[j] / total;
+        worst = std::max(worst, std::abs(out[s][w][j].item<double>() - expected));
+      }
+    }
+  CHECK(worst < 1e-5);
+
+  // The log-weights it reports: log(e^{l_i} / total) for the valid and the
+  // free candidate, -inf for the invalid ones.
+  torch::Tensor log_w;
+  model->forward(latents, mask, &anchors, &log_w);
+  REQUIRE(log_w.sizes() == torch::IntArrayRef({b, k, c + 1}));
+  double worst_log = 0.0;
+  for (int64_t s = 0; s < b; ++s)
+    for (int64_t w = 0; w < k; ++w) {
+      double total = 0.0;
+      for (int64_t i = 0; i <= c; ++i)
+        if (i == c || anchors.valid[s][w][i].item<float>() > 0.5f)
+          total += std::exp(head[s][w][3 + i].item<double>());
+      for (int64_t i = 0; i <= c; ++i) {
+        const double got = log_w[s][w][i].item<double>();
+        if (i < c && anchors.valid[s][w][i].item<float>() < 0.5f) {
+          CHECK(std::isinf(got));
+          CHECK(got < 0.0);
+        } else {
+          worst_log = std::max(
+              worst_log, std::abs(got - (head[s][w][3 + i].item<double>() - std::log(total))));
+        }
+      }
+    }
+  CHECK(worst_log < 1e-5);
+}
+
+TEST_CASE("UavLocModel anchored: invalid candidates have no influence, valid ones do",
+          "[pipeline]") {
+  InitTorch(1, 33);
+  UavLocModel model(AnchoredConfig(8));
+  torch::NoGradGuard no_grad;
+  const int64_t b = 3, k = 9;
+  const torch::Tensor latents = torch::randn({b, k, 3, 8});
+  const torch::Tensor mask = torch::bernoulli(torch::full({b, k, 3}, 0.7));
+  AnchorBatch zeros = RandomAnchors(b, k, 0.5);
+  zeros.valid[1][4].copy_(torch::tensor({1.0f, 0.0f, 1.0f, 0.0f, 1.0f, 0.0f}));  // both kinds below
+  AnchorBatch huge = Clone(zeros);
+  const torch::Tensor invalid = (zeros.valid < 0.5).unsqueeze(-1).expand_as(zeros.candidates);
+  zeros.candidates.masked_fill_(invalid, 0.0f);
+  huge.candidates.masked_fill_(invalid, 1e6f);
+  REQUIRE(invalid.any().item<bool>());
+  const torch::Tensor out = model(latents, mask, &zeros);
+  REQUIRE(AllFinite(out));
+  CHECK(torch::equal(out, model(latents, mask, &huge)));
+
+  // Moving a valid candidate moves that window's output, by less than the
+  // candidate moved (its weight is in (0, 1)) and along the same direction;
+  // the other windows do not change (candidates do not enter the state).
+  AnchorBatch moved = Clone(zeros);
+  moved.candidates[1][4][2] += torch::tensor({1.0f, -2.0f, 0.5f});
+  const torch::Tensor moved_out = model(latents, mask, &moved);
+  const torch::Tensor delta = (moved_out - out)[1][4];
+  CHECK(delta.norm().item<double>() > 1e-4);
+  CHECK(delta.norm().item<double>() < std::sqrt(5.25));
+  const torch::Tensor ratio = delta / torch::tensor({1.0f, -2.0f, 0.5f});
+  CHECK((ratio - ratio[0]).abs().max().item<double>() < 1e-5);
+  CHECK(ratio[0].item<double>() > 0.0);
+  CHECK(ratio[0].item<double>() < 1.0);
+  torch::Tensor others = (moved_out - out).abs();
+  others[1][4].zero_();
+  CHECK(others.max().item<double>() == 0.0);
+
+  // Moving an invalid one there changes nothing.
+  AnchorBatch moved_invalid = Clone(zeros);
+  moved_invalid.candidates[1][4][3] += torch::tensor({1.0f, -2.0f, 0.5f});
+  CHECK(torch::equal(model(latents, mask, &moved_invalid), out));
+}
+
+TEST_CASE("UavLocModel anchored: no valid candidate leaves the free position, never NaN",
+          "[pipeline]") {
+  InitTorch(1, 34);
+  UavLocModel model(AnchoredConfig(8));
+  const int64_t b = 2, k = 12;
+  const torch::Tensor latents = torch::randn({b, k, 3, 8});
+  torch::Tensor mask = torch::ones({b, k, 3});
+  mask.slice(1, 3, 9).zero_();  // six windows with nothing at all
+  mask[1].zero_();              // a whole sequence with nothing at all
+  AnchorBatch none = RandomAnchors(b, k, 0.0);
+  none.features.zero_();  // what the tracker gives before anything is seen
+  none.features.slice(2, 4 * kAnchorCandidates, 4 * kAnchorCandidates + 6).fill_(1.0f);
+  REQUIRE(none.valid.sum().item<double>() == 0.0);
+  {
+    torch::NoGradGuard no_grad;
+    const torch::Tensor out = model(latents, mask, &none);
+    REQUIRE(AllFinite(out));
+    CHECK(torch::equal(
+        out, HeadOutput(model, latents, mask, none).narrow(-1, 3 + kAnchorCandidates + 1, 3)));
+    AnchorBatch far = Clone(none);
+    far.candidates.fill_(1e6f);
+    CHECK(torch::equal(model(latents, mask, &far), out));
+  }
+
+  // Gradients through all-missing windows and all-invalid candidates.
+  AnchorBatch some = RandomAnchors(b, k, 0.5);
+  some.valid[0].zero_();
+  for (const AnchorBatch* anchors : {&none, &some}) {
+    model->zero_grad();
+    const torch::Tensor out = model(latents, mask, anchors);
+    REQUIRE(AllFinite(out));
+    out.pow(2).sum().backward();
+    for (const auto& p : model->named_parameters()) {
+      INFO(p.key());
+      if (p.value().grad().defined()) CHECK(AllFinite(p.value().grad()));
+    }
+  }
+
+  model->eval();
+  WindowInputs empty;
+  for (std::int64_t k_step = 1; k_step <= 20; ++k_step) {
+    empty.window = k_step;
+    CHECK(model->Step(empty).allFinite());
+  }
+}
+
+TEST_CASE("UavLocModel anchored: the online Step equals the batch forward with tracked anchors",
+          "[pipeline]") {
+  InitTorch(1, 35);
+  UavLocModelConfig config = AnchoredConfig(8);
+  config.position_centre_m = {10.0, -5.0, 30.0};
+  config.position_scale_m = 20.0;
+  UavLocModel model(config);
+  model->eval();
+  WindowInputs empty_first;
+  empty_first.window = 1;
+  const Eigen::Vector3d fresh_empty = model->Step(empty_first);
+  model->ResetState();
+  torch::Generator gen = torch::make_generator<torch::CPUGeneratorImpl>(9);
+  // Windows 20 to 22 and 41 never reach Step (skipped: stepped as empty
+  // windows); the batch sees them as empty windows.
+  const auto skipped = [](std::int64_t k) { return (k >= 20 && k <= 22) || k == 41; };
+  const std::int64_t windows = 60;
+  AnchorTracker tracker(config.window_s, config.position_centre_m, config.position_scale_m);
+  std::vector<AlignedWindow> aligned;
+  std::vector<AnchorWindow> anchors;
+  std::vector<WindowInputs> inputs;
+  std::vector<std::optional<Eigen::Vector3d>> online;
+  int with_ray = 0;
+  for (std::int64_t k = 1; k <= windows; ++k) {
+    WindowInputs w = RandomAnchoredWindow(k, 8, 0.3, config.position_centre_m, 10.0, gen);
+    if (skipped(k)) w = WindowInputs{k, {}};
+    inputs.push_back(w);
+    aligned.push_back(model->te_align().Align(w));
+    anchors.push_back(tracker.Update(k, model->te_align().LatestAnchors(w)));
+    with_ray += anchors.back().valid[2] > 0.5f ? 1 : 0;
+    online.push_back(skipped(k) ? std::nullopt : std::optional(model->Step(w)));
+  }
+  REQUIRE(with_ray > windows / 2);  // the anchors matter in most windows
+  const FusionBatch batch = StackWindows({aligned});
+  const AnchorBatch anchor_batch = StackAnchors({anchors});
+  REQUIRE(anchor_batch.features.sizes() == torch::IntArrayRef({1, windows, kAnchorFeatures}));
+  REQUIRE(anchor_batch.candidates.sizes() ==
+          torch::IntArrayRef({1, windows, kAnchorCandidates, 3}));
+  REQUIRE(anchor_batch.valid.sizes() == torch::IntArrayRef({1, windows, kAnchorCandidates}));
+  torch::NoGradGuard no_grad;
+  const torch::Tensor metres =
+      model->PositionInMetres(model(batch.latents, batch.mask, &anchor_batch));
+  double worst = 0.0;
+  for (std::int64_t k = 0; k < windows; ++k) {
+    const auto& p = online[static_cast<std::size_t>(k)];
+    if (!p) continue;
+    for (int i = 0; i < 3; ++i)
+      worst = std::max(worst, std::abs(metres[0][k][i].item<double>() - (*p)[i]));
+  }
+  CHECK(worst < 1e-5 * 20.0);  // 1e-5 in normalised units
+
+  // A tracker that forgets between windows (the same arrivals, no holding)
+  // gives other outputs: Step really holds anchors across windows.
+  std::vector<AnchorWindow> unheld;
+  for (std::int64_t k = 1; k <= windows; ++k) {
+    AnchorTracker forgetful(config.window_s, config.position_centre_m, config.position_scale_m);
+    unheld.push_back(forgetful.Update(
+        k, model->te_align().LatestAnchors(inputs[static_cast<std::size_t>(k - 1)])));
+  }
+  const AnchorBatch unheld_batch = StackAnchors({unheld});
+  CHECK(!torch::allclose(model(batch.latents, batch.mask, &unheld_batch),
+                         model(batch.latents, batch.mask, &anchor_batch)));
+
+  // A gap longer than kMaxGapWindows restarts from nothing, anchors included:
+  // an empty window then gives what an empty first window gave a fresh model.
+  WindowInputs after_gap;
+  after_gap.window = windows + UavLocModelImpl::kMaxGapWindows + 2;
+  CHECK((model->Step(after_gap) - fresh_empty).norm() < 1e-9);
+  // So does ResetState.
+  model->Step(
+      RandomAnchoredWindow(after_gap.window + 1, 8, 0.0, config.position_centre_m, 10.0, gen));
+  model->ResetState();
+  CHECK((model->Step(empty_first) - fresh_empty).norm() < 1e-9);
 }
 
 TEST_CASE("UavLocModel: skipped windows are stepped as empty windows", "[pipeline]") {
@@ -214,6 +528,57 @@ TEST_CASE("UavLocModel: save and load round trip, with the JSON sidecar", "[pipe
   testing::WriteFile(SidecarPath(path), "{\"format\": \"uavloc-model/1\", \"d_modle\": 3}");
   CHECK_THROWS_WITH(LoadUavLocModel(path), Catch::Contains("d_modle"));
   CHECK_THROWS_AS(LoadUavLocModel(dir + "/missing.pt"), core::ConfigError);
+}
+
+TEST_CASE("UavLocModel anchored: save and load round trip keeps anchored", "[pipeline]") {
+  InitTorch(1, 36);
+  UavLocModelConfig config = AnchoredConfig(8);
+  config.position_centre_m = {1.0, 2.0, 3.0};
+  config.position_scale_m = 50.0;
+  UavLocModel model(config);
+  model->eval();
+  const std::string dir = testing::TempDir("fusion_model_anchored");
+  const std::string path = dir + "/uavloc.pt";
+  SaveUavLocModel(model, path);
+  CHECK_THAT(testing::ReadFile(SidecarPath(path)), Catch::Contains("\"anchored\": true"));
+  UavLocModel loaded = LoadUavLocModel(path);
+  loaded->eval();
+  CHECK(loaded->config().anchored);
+  CHECK(loaded->regressor->head->weight.sizes() ==
+        torch::IntArrayRef({3 + kAnchorCandidates + 1 + 3, 32}));
+  const auto a = model->named_parameters();
+  const auto b = loaded->named_parameters();
+  REQUIRE(a.size() == b.size());
+  for (const auto& p : a) CHECK(torch::equal(p.value(), b[p.key()]));
+  {
+    torch::NoGradGuard no_grad;
+    const torch::Tensor latents = torch::randn({2, 6, 3, 8});
+    const torch::Tensor mask = torch::bernoulli(torch::full({2, 6, 3}, 0.7));
+    const AnchorBatch anchors = RandomAnchors(2, 6, 0.5);
+    CHECK(torch::equal(model(latents, mask, &anchors), loaded(latents, mask, &anchors)));
+  }
+  torch::Generator gen = torch::make_generator<torch::CPUGeneratorImpl>(11);
+  for (std::int64_t k = 1; k <= 8; ++k) {
+    const WindowInputs w = RandomAnchoredWindow(k, 8, 0.2, config.position_centre_m, 10.0, gen);
+    CHECK(model->Step(w) == loaded->Step(w));
+  }
+
+  // A plain model's sidecar says so, and one written before the anchors
+  // existed (no "anchored" key) loads as a plain model.
+  UavLocModel plain(SmallConfig(8));
+  const std::string plain_path = dir + "/plain.pt";
+  SaveUavLocModel(plain, plain_path);
+  std::string sidecar = testing::ReadFile(SidecarPath(plain_path));
+  CHECK_THAT(sidecar, Catch::Contains("\"anchored\": false"));
+  const std::size_t at = sidecar.find("\"anchored\": false,");
+  REQUIRE(at != std::string::npos);
+  sidecar.erase(at, std::string("\"anchored\": false,").size());
+  testing::WriteFile(SidecarPath(plain_path), sidecar);
+  CHECK(!LoadUavLocModel(plain_path)->config().anchored);
+
+  // The weights of a plain model do not fit an anchored sidecar.
+  testing::WriteFile(SidecarPath(plain_path), testing::ReadFile(SidecarPath(path)));
+  CHECK_THROWS_WITH(LoadUavLocModel(plain_path), Catch::Contains(plain_path));
 }
 
 TEST_CASE("UavLocModel: the same seed gives the same model and outputs", "[pipeline]") {

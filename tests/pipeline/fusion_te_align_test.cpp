@@ -17,7 +17,7 @@ TeAlignConfig Config(int z) {
   return c;
 }
 
-LatentFrame Frame(double t_s, std::vector<float> latent) { return {t_s, std::move(latent)}; }
+LatentFrame Frame(double t_s, std::vector<float> latent) { return {t_s, std::move(latent), {}}; }
 
 }  // namespace
 

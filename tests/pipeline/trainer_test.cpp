@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "pipeline/anchors.h"
 #include "pipeline/dataset.h"
 #include "pipeline/edge_localizer.h"
 #include "pipeline/ib_model_io.h"
@@ -199,7 +200,8 @@ WindowInputs EncodedWindow(const UavLocModelFiles& files, const Episode& ep, std
     if (s.t_s < (k - 1) * kWindow || s.t_s >= k * kWindow) continue;
     const NodeEncoder& enc = files.encoder(s.modality);
     w.frames[static_cast<int>(s.modality)].push_back(
-        {s.t_s, s.camera ? enc.Encode(*s.camera) : enc.Encode(*s.points)});
+        {s.t_s, s.camera ? enc.Encode(*s.camera) : enc.Encode(*s.points),
+         s.camera ? AnchorOf(*s.camera) : AnchorOf(*s.points)});
   }
   return w;
 }
@@ -401,7 +403,8 @@ TEST_CASE("EdgeLocalizer: untrained weights ride out windows with every modality
     const torch::Tensor z = torch::randn({8}, gen);
     w.frames[static_cast<int>(Modality::kRadar)].push_back(
         {5 * kWindow + 0.05 + 0.1 * i,
-         std::vector<float>(z.data_ptr<float>(), z.data_ptr<float>() + 8)});
+         std::vector<float>(z.data_ptr<float>(), z.data_ptr<float>() + 8),
+         {}});
   }
   REQUIRE(edge->OnWindow(w).has_value());
   for (std::int64_t k = 7; k < 37; ++k) {

@@ -1,0 +1,434 @@
+// Geometric anchors (pipeline/anchors.h): a node's anchor against its closed
+// form (centroid, ray), the projection onto a ray, the edge's tracker of held
+// anchors window by window (candidates and the 41 features worked out by
+// hand), and TE-Align's pick of a window's latest anchor.
+#include "pipeline/anchors.h"
+
+#include <array>
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <cstddef>
+#include <limits>
+#include <stdexcept>
+#include <utility>
+#include <vector>
+
+#include "pipeline/te_align.h"
+
+namespace uavsim::pipeline {
+namespace {
+
+using Kind = GeometricAnchor::Kind;
+
+constexpr std::size_t kCamera = static_cast<std::size_t>(Modality::kCamera);
+constexpr std::size_t kLidar = static_cast<std::size_t>(Modality::kLidar);
+constexpr std::size_t kRadar = static_cast<std::size_t>(Modality::kRadar);
+
+// Feature offsets (see kAnchorFeatures).
+constexpr std::size_t kAgeOffset = 24;  // 3 coarse (/ 5 s), then 3 fine (/ 1 s)
+constexpr std::size_t kFreshOffset = 30;
+constexpr std::size_t kMovingOffset = 33;
+constexpr std::size_t kRayDistanceOffset = 35;
+constexpr std::size_t kLidarRadarOffset = 37;
+constexpr std::size_t kDirectionOffset = 38;
+
+GeometricAnchor Point(double x, double y, double z, double t_s = 0.0) {
+  GeometricAnchor a;
+  a.kind = Kind::kPoint;
+  a.origin_w = {x, y, z};
+  a.t_s = t_s;
+  return a;
+}
+
+GeometricAnchor Ray(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
+                    double t_s = 0.0) {
+  GeometricAnchor a;
+  a.kind = Kind::kRay;
+  a.origin_w = origin;
+  a.direction_w = direction.normalized();
+  a.t_s = t_s;
+  return a;
+}
+
+void CheckVector(const Eigen::Vector3d& got, const Eigen::Vector3d& expected, double tol = 1e-12) {
+  INFO("got (" << got.transpose() << "), expected (" << expected.transpose() << ")");
+  CHECK((got - expected).norm() <= tol);
+}
+
+// Candidate i's valid flag and position in both the candidates and the
+// features [valid, x, y, z].
+void CheckCandidate(const AnchorWindow& w, int i, bool valid,
+                    const Eigen::Vector3d& expected = Eigen::Vector3d::Zero()) {
+  INFO("candidate " << i);
+  const auto u = static_cast<std::size_t>(i);
+  CHECK(w.valid[u] == (valid ? 1.0f : 0.0f));
+  CHECK(w.features[4 * u] == (valid ? 1.0f : 0.0f));
+  if (!valid) return;
+  CheckVector(w.candidates[u], expected);
+  for (int c = 0; c < 3; ++c)
+    CHECK(w.features[4 * u + 1 + static_cast<std::size_t>(c)] == Approx(expected[c]).margin(1e-6));
+}
+
+void CheckFeatures(const AnchorWindow& w, std::size_t offset, const std::vector<double>& expected) {
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    INFO("feature " << offset + i);
+    CHECK(w.features[offset + i] == Approx(expected[i]).margin(1e-6));
+  }
+}
+
+LatentFrame Frame(double t_s, const GeometricAnchor& anchor) {
+  LatentFrame f;
+  f.t_s = t_s;
+  f.latent.assign(4, 0.5f);
+  f.anchor = anchor;
+  return f;
+}
+
+}  // namespace
+
+TEST_CASE("AnchorOf: a point cloud's anchor is the mean of its points", "[pipeline]") {
+  PointObservation lidar;
+  lidar.channels = 4;  // x, y, z, intensity
+  lidar.values = {1, 2, 3, 100, 4, 5, 6, 200, 7, -8, 0, 50};
+  lidar.sensor_position_w = {1, 2, -1};
+  lidar.t_s = 2.5;
+  const GeometricAnchor l = AnchorOf(lidar);
+  CHECK(l.kind == Kind::kPoint);
+  CHECK(l.t_s == 2.5);
+  // ((1 + 4 + 7) / 3, (2 + 5 - 8) / 3, (3 + 6 + 0) / 3)
+  CheckVector(l.origin_w, {4.0, -1.0 / 3.0, 3.0}, 1e-6);
+  // The sensor and the mean range: |(0, 0, 4)| = 4, |(3, 3, 7)| = sqrt(67),
+  // |(6, -10, 1)| = sqrt(137).
+  CheckVector(l.sensor_w, {1.0, 2.0, -1.0});
+  CHECK(l.range_m == Approx((4.0 + std::sqrt(67.0) + std::sqrt(137.0)) / 3.0).epsilon(1e-9));
+
+  PointObservation radar;
+  radar.channels = 5;  // x, y, z, radial velocity, SNR
+  radar.values = {10, 0, 0, -3, 20, 0, 10, 0, 4, 25, 0, 0, 10, 1, 30, 2, 2, 2, 0, 15};
+  const GeometricAnchor r = AnchorOf(radar);
+  CHECK(r.kind == Kind::kPoint);
+  CheckVector(r.origin_w, {3.0, 3.0, 3.0}, 1e-6);  // (12, 12, 12) / 4
+
+  PointObservation one;
+  one.channels = 5;
+  one.values = {-1.5f, 2.25f, 40.0f, 0.0f, 10.0f};
+  CheckVector(AnchorOf(one).origin_w, {-1.5, 2.25, 40.0});
+
+  PointObservation empty;
+  empty.channels = 4;
+  CHECK(AnchorOf(empty).kind == Kind::kNone);
+  empty.channels = 5;
+  CHECK(AnchorOf(empty).kind == Kind::kNone);
+}
+
+TEST_CASE("AnchorOf: a camera's anchor is the left eye's ray, none when undetected", "[pipeline]") {
+  CameraObservation cam;
+  cam.detected = true;
+  cam.eye_left_w = {1.0, 2.0, 3.0};
+  cam.eye_right_w = {1.5, 2.0, 3.0};
+  cam.bearing_left_w = {0.0, 3.0, 4.0};  // length 5
+  cam.bearing_right_w = {1.0, 0.0, 0.0};
+  cam.t_s = 0.7;
+  const GeometricAnchor a = AnchorOf(cam);
+  CHECK(a.kind == Kind::kRay);
+  CHECK(a.t_s == 0.7);
+  CheckVector(a.origin_w, {1.0, 2.0, 3.0});
+  CheckVector(a.direction_w, {0.0, 0.6, 0.8});
+
+  cam.bearing_left_w = {-2.0, 1.0, 2.0};  // length 3
+  CheckVector(AnchorOf(cam).direction_w, {-2.0 / 3.0, 1.0 / 3.0, 2.0 / 3.0});
+
+  cam.detected = false;
+  CHECK(AnchorOf(cam).kind == Kind::kNone);
+  CHECK(AnchorOf(CameraObservation{}).kind == Kind::kNone);
+
+  // A degenerate bearing gives no ray rather than a NaN direction.
+  cam.detected = true;
+  cam.bearing_left_w = Eigen::Vector3d::Zero();
+  CHECK(AnchorOf(cam).kind == Kind::kNone);
+}
+
+TEST_CASE("AnchorBytes: 24 bytes for the camera's ray, 16 for a point and its range",
+          "[pipeline]") {
+  CHECK(AnchorBytes(Modality::kCamera) == 24);
+  CHECK(AnchorBytes(Modality::kLidar) == 16);
+  CHECK(AnchorBytes(Modality::kRadar) == 16);
+}
+
+TEST_CASE("ProjectOntoRay: the foot of the perpendicular, at least 1 m ahead", "[pipeline]") {
+  const Eigen::Vector3d o(1.0, 2.0, 3.0);
+  // Along x: the foot of (7, 5, -1) is (7, 2, 3).
+  CheckVector(ProjectOntoRay({7.0, 5.0, -1.0}, o, Eigen::Vector3d::UnitX()), {7.0, 2.0, 3.0});
+  // Along (0, 0.6, 0.8): p - o = (4, 5, 10), (p - o).d = 3 + 8 = 11, foot o + 11 d.
+  const Eigen::Vector3d d(0.0, 0.6, 0.8);
+  CheckVector(ProjectOntoRay({5.0, 7.0, 13.0}, o, d), {1.0, 2.0 + 6.6, 3.0 + 8.8});
+  // A point on the ray is its own foot.
+  CheckVector(ProjectOntoRay(o + 4.0 * d, o, d), o + 4.0 * d);
+  // Behind the origin, at the origin or less than 1 m ahead: o + 1 d.
+  CheckVector(ProjectOntoRay({-5.0, 0.0, 0.0}, o, Eigen::Vector3d::UnitX()), {2.0, 2.0, 3.0});
+  CheckVector(ProjectOntoRay(o, o, d), o + d);
+  CheckVector(ProjectOntoRay(o + 0.5 * d + Eigen::Vector3d(3.0, 0.0, 0.0), o, d), o + d);
+  // Exactly 1 m ahead: both rules agree.
+  CheckVector(ProjectOntoRay(o + d, o, d), o + d);
+}
+
+TEST_CASE("RangeOnRay: the ray's crossing of the range sphere nearer the hint", "[pipeline]") {
+  const Eigen::Vector3d o = Eigen::Vector3d::Zero();
+  const Eigen::Vector3d x = Eigen::Vector3d::UnitX();
+  // Sensor (1, 2, 3), range 10, ray along x from the origin:
+  // (t - 1)^2 + 13 = 100, t = 1 +- sqrt(87).
+  const Eigen::Vector3d s(1.0, 2.0, 3.0);
+  CheckVector(RangeOnRay(s, 10.0, {11.0, 2.0, 3.0}, o, x), {1.0 + std::sqrt(87.0), 0.0, 0.0},
+              1e-12);
+  // Sensor (20, 3, 0), range 5: t = 20 -+ 4; the hint picks the crossing.
+  const Eigen::Vector3d s2(20.0, 3.0, 0.0);
+  CheckVector(RangeOnRay(s2, 5.0, {15.0, 0.0, 0.0}, o, x), {16.0, 0.0, 0.0}, 1e-12);
+  CheckVector(RangeOnRay(s2, 5.0, {25.0, 9.0, 0.0}, o, x), {24.0, 0.0, 0.0}, 1e-12);
+  // A sphere the ray misses: the ray's point nearest the sensor.
+  CheckVector(RangeOnRay(s2, 2.0, {0.0, 0.0, 0.0}, o, x), {20.0, 0.0, 0.0}, 1e-12);
+  // Both crossings behind the origin: 1 m ahead.
+  CheckVector(RangeOnRay({-20.0, 0.0, 0.0}, 5.0, {-20.0, 0.0, 0.0}, o, x), {1.0, 0.0, 0.0});
+}
+
+TEST_CASE("AnchorTracker: candidates and features window by window", "[pipeline]") {
+  const Eigen::Vector3d centre(1.0, 2.0, 3.0);
+  AnchorTracker tracker(0.2, centre, 10.0);
+
+  SECTION("nothing seen yet") {
+    const AnchorWindow w = tracker.Update(1, {});
+    for (int i = 0; i < kAnchorCandidates; ++i) CheckCandidate(w, i, false);
+    CheckFeatures(w, 0, std::vector<double>(24, 0.0));
+    CheckFeatures(w, kAgeOffset,
+                  {1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0});
+  }
+
+  SECTION("a LiDAR point, then a camera ray and a radar point, then nothing") {
+    // Window 1 [0, 0.2): only a LiDAR point, 10 m east of the centre, seen
+    // from the centre at t = 0.1 s.
+    PointObservation lidar;
+    lidar.channels = 4;
+    lidar.values = {11, 2, 3, 1};
+    lidar.sensor_position_w = centre;
+    lidar.t_s = 0.1;
+    std::array<GeometricAnchor, kModalityCount> arrived;
+    arrived[kLidar] = AnchorOf(lidar);
+    const AnchorWindow w1 = tracker.Update(1, arrived);
+    CheckCandidate(w1, 0, true, {1.0, 0.0, 0.0});
+    for (int i = 1; i < kAnchorCandidates; ++i) {
+      CheckCandidate(w1, i, false);
+      CHECK(w1.candidates[static_cast<std::size_t>(i)] == Eigen::Vector3d::Zero());
+      CHECK(w1.features[4 * static_cast<std::size_t>(i) + 1] == 0.0f);
+    }
+    // Ages camera, LiDAR, radar at the window's end (0.2 s), / 5 s then
+    // / 1 s; fresh; ray distances; |L - R|; ray direction.
+    CheckFeatures(
+        w1, kAgeOffset,
+        {1.0, 0.1 / 5.0, 1.0, 1.0, 0.1, 1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0});
+
+    // Window 2 [0.2, 0.4): a camera ray from the origin along +x (bearing not
+    // unit) at 0.35 s and a radar point at 0.3 s, seen from the origin; the
+    // LiDAR point is held from window 1.
+    CameraObservation cam;
+    cam.detected = true;
+    cam.t_s = 0.35;
+    cam.eye_left_w = Eigen::Vector3d::Zero();
+    cam.bearing_left_w = {2.0, 0.0, 0.0};
+    PointObservation radar;
+    radar.channels = 5;
+    radar.values = {5, 4, 0, 0, 0};
+    radar.t_s = 0.3;
+    arrived = {};
+    arrived[kCamera] = AnchorOf(cam);
+    arrived[kRadar] = AnchorOf(radar);
+    const AnchorWindow w2 = tracker.Update(2, arrived);
+    CheckCandidate(w2, 0, true, {1.0, 0.0, 0.0});
+    CheckCandidate(w2, 1, true, {0.4, 0.2, -0.3});  // ((5, 4, 0) - c) / 10
+    // LiDAR (11, 2, 3) onto the x axis: (11, 0, 0), normalised (1, -0.2, -0.3).
+    CheckCandidate(w2, 2, true, {1.0, -0.2, -0.3});
+    // Radar (5, 4, 0) onto the x axis: (5, 0, 0), normalised (0.4, -0.2, -0.3).
+    CheckCandidate(w2, 3, true, {0.4, -0.2, -0.3});
+    // The x axis 10 m from the LiDAR at (1, 2, 3): (t - 1)^2 + 13 = 100, the
+    // crossing near (11, 2, 3) at t = 1 + sqrt(87).
+    CheckCandidate(w2, 4, true, {std::sqrt(87.0) / 10.0, -0.2, -0.3});
+    // The x axis sqrt(41) m from the radar at the origin: t = sqrt(41).
+    CheckCandidate(w2, 5, true, {(std::sqrt(41.0) - 1.0) / 10.0, -0.2, -0.3});
+    // One fix each so far: nothing carried forward.
+    CheckFeatures(w2, kMovingOffset, {0.0, 0.0});
+    // At 0.4 s: camera 0.05 s old, LiDAR 0.3, radar 0.1.
+    CheckFeatures(w2, kAgeOffset, {0.05 / 5.0, 0.3 / 5.0, 0.1 / 5.0, 0.05, 0.3, 0.1});
+    CheckFeatures(w2, kFreshOffset, {1.0, 0.0, 1.0});
+    // LiDAR is sqrt(2^2 + 3^2) from the x axis, radar 4: in units of 5 m.
+    CheckFeatures(w2, kRayDistanceOffset, {std::sqrt(13.0) / 5.0, 4.0 / 5.0});
+    // |(11, 2, 3) - (5, 4, 0)| = |(6, -2, 3)| = 7, over the 10 m scale.
+    CheckFeatures(w2, kLidarRadarOffset, {0.7});
+    CheckFeatures(w2, kDirectionOffset, {1.0, 0.0, 0.0});
+
+    // Window 3: nothing arrives, everything is held and 0.2 s older.
+    const AnchorWindow w3 = tracker.Update(3, {});
+    for (int i = 0; i < 6; ++i) {
+      const auto u = static_cast<std::size_t>(i);
+      CHECK(w3.valid[u] == 1.0f);
+      CheckVector(w3.candidates[u], w2.candidates[u]);
+    }
+    CheckFeatures(w3, kAgeOffset,
+                  {0.25 / 5.0, 0.5 / 5.0, 0.3 / 5.0, 0.25, 0.5, 0.3, 0.0, 0.0, 0.0});
+    CheckFeatures(w3, kRayDistanceOffset, {std::sqrt(13.0) / 5.0, 0.8, 0.7, 1.0, 0.0, 0.0});
+
+    // Window 20 (end 4.0 s): camera 3.65 s old, LiDAR 3.9, radar 3.7; the
+    // fine ages saturate.
+    const AnchorWindow w20 = tracker.Update(20, {});
+    CheckFeatures(w20, kAgeOffset, {3.65 / 5.0, 3.9 / 5.0, 3.7 / 5.0, 1.0, 1.0, 1.0});
+
+    // Window 40 (end 8 s): all ages saturate.
+    const AnchorWindow w40 = tracker.Update(40, {});
+    CheckFeatures(w40, kAgeOffset, {1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0});
+    for (int i = 0; i < 6; ++i)
+      CHECK(w40.valid[static_cast<std::size_t>(i)] == 1.0f);  // held however old
+
+    // Window 41 (end 8.2 s): a new camera ray at 8.1 s replaces the old one:
+    // from (1, 2, 3) along (0, 0.6, 0.8). LiDAR (11, 2, 3): p - o = (10, 0,
+    // 0), along 0, so the candidate is o + 1 d = (1, 2.6, 3.8), normalised
+    // (0, 0.06, 0.08), and the distance |(10, -0.6, -0.8)| = sqrt(101).
+    // Radar (5, 4, 0): p - o = (4, 2, -3), along 1.2 - 2.4 = -1.2, again
+    // o + d; distance |(4, 1.4, -3.8)| = sqrt(16 + 1.96 + 14.44).
+    arrived = {};
+    arrived[kCamera] = Ray(centre, {0.0, 3.0, 4.0}, 8.1);
+    const AnchorWindow w41 = tracker.Update(41, arrived);
+    CheckCandidate(w41, 2, true, {0.0, 0.06, 0.08});
+    CheckCandidate(w41, 3, true, {0.0, 0.06, 0.08});
+    // Radar at sqrt(41) m from the origin along o + t d: t^2 + 7.2 t + 14 =
+    // 41, t = -3.6 + sqrt(39.96) (the other crossing is behind the eye).
+    const double t5 = -3.6 + std::sqrt(39.96);
+    CheckCandidate(w41, 5, true, {0.0, 0.06 * t5, 0.08 * t5});
+    CheckFeatures(w41, kAgeOffset, {0.1 / 5.0, 1.0, 1.0, 0.1, 1.0, 1.0, 1.0, 0.0, 0.0});
+    CheckFeatures(w41, kRayDistanceOffset,
+                  {std::sqrt(101.0) / 5.0, std::sqrt(32.4) / 5.0, 0.7, 0.0, 0.6, 0.8});
+
+    // Reset: nothing held any more.
+    tracker.Reset();
+    const AnchorWindow r = tracker.Update(42, {});
+    for (int i = 0; i < kAnchorCandidates; ++i) CheckCandidate(r, i, false);
+    CheckFeatures(r, 0, std::vector<double>(24, 0.0));
+    CheckFeatures(r, kAgeOffset,
+                  {1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0});
+  }
+}
+
+TEST_CASE("AnchorTracker: points carried forward at the velocity of their last two fixes",
+          "[pipeline]") {
+  AnchorTracker tracker(0.2, Eigen::Vector3d::Zero(), 10.0);
+  // A LiDAR at the origin; its fixes carry their mean range.
+  const auto lidar_fix = [](const Eigen::Vector3d& p, double t_s) {
+    GeometricAnchor a = Point(p.x(), p.y(), p.z(), t_s);
+    a.range_m = p.norm();
+    return a;
+  };
+  std::array<GeometricAnchor, kModalityCount> arrived;
+  arrived[kCamera] = Ray(Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ(), 0.15);
+  arrived[kLidar] = lidar_fix({0.0, 0.0, 30.0}, 0.1);
+  const AnchorWindow w1 = tracker.Update(1, arrived);
+  CheckCandidate(w1, 0, true, {0.0, 0.0, 3.0});  // as seen: one fix
+  CheckFeatures(w1, kMovingOffset, {0.0, 0.0});
+  // Window 3 [0.4, 0.6): a second LiDAR fix 2 m east, 0.4 s later: 5 m/s.
+  arrived = {};
+  arrived[kLidar] = lidar_fix({2.0, 0.0, 30.0}, 0.5);
+  const AnchorWindow w3 = tracker.Update(3, arrived);
+  CheckFeatures(w3, kMovingOffset, {1.0, 0.0});
+  // At the window's end (0.6 s): 2 + 5 * 0.1 = 2.5 m east.
+  CheckCandidate(w3, 0, true, {0.25, 0.0, 3.0});
+  CheckCandidate(w3, 2, true, {0.0, 0.0, 3.0});  // onto the z axis
+  // The range 30 -> sqrt(904) in 0.4 s, carried 0.1 s on; the z axis at it.
+  const double range = std::sqrt(904.0) + (std::sqrt(904.0) - 30.0) / 0.4 * 0.1;
+  CheckCandidate(w3, 4, true, {0.0, 0.0, range / 10.0});
+  for (int i : {1, 3, 5}) CheckCandidate(w3, i, false);  // no radar
+  // Window 4, nothing new: 2 + 5 * 0.3 = 3.5 m east.
+  CheckCandidate(tracker.Update(4, {}), 0, true, {0.35, 0.0, 3.0});
+
+  // Implausible speeds and fixes too far apart in time carry nothing: the
+  // point stays as last seen.
+  AnchorTracker fast(0.2, Eigen::Vector3d::Zero(), 10.0);
+  arrived = {};
+  arrived[kRadar] = Point(0.0, 0.0, 30.0, 0.1);
+  fast.Update(1, arrived);
+  arrived[kRadar] = Point(10.0, 0.0, 30.0, 0.2);  // 100 m/s
+  const AnchorWindow f = fast.Update(2, arrived);
+  CheckCandidate(f, 1, true, {1.0, 0.0, 3.0});
+  CheckFeatures(f, kMovingOffset, {0.0, 0.0});
+  AnchorTracker slow(0.2, Eigen::Vector3d::Zero(), 10.0);
+  arrived[kRadar] = Point(0.0, 0.0, 30.0, 0.1);
+  slow.Update(1, arrived);
+  arrived[kRadar] = Point(1.0, 0.0, 30.0, 2.5);  // 2.4 s later
+  const AnchorWindow sl = slow.Update(13, arrived);
+  CheckCandidate(sl, 1, true, {0.1, 0.0, 3.0});
+  CheckFeatures(sl, kMovingOffset, {0.0, 0.0});
+}
+
+TEST_CASE("AnchorTracker: distance features are clipped at 4", "[pipeline]") {
+  AnchorTracker tracker(0.1, Eigen::Vector3d::Zero(), 10.0);
+  std::array<GeometricAnchor, kModalityCount> arrived;
+  arrived[kCamera] = Ray(Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ());
+  arrived[kLidar] = Point(30.0, 0.0, 50.0);   // 30 m from the ray: 6 -> 4
+  arrived[kRadar] = Point(-19.0, 0.0, 50.0);  // 19 m: 3.8; |L - R| 49 m: 4.9 -> 4
+  const AnchorWindow w = tracker.Update(7, arrived);
+  CheckFeatures(w, kRayDistanceOffset, {4.0, 3.8, 4.0});
+  CheckCandidate(w, 2, true, {0.0, 0.0, 5.0});
+  CheckCandidate(w, 3, true, {0.0, 0.0, 5.0});
+  // A single held anchor gives no LiDAR-radar distance.
+  AnchorTracker only_radar(0.1, Eigen::Vector3d::Zero(), 10.0);
+  arrived = {};
+  arrived[kRadar] = Point(-19.0, 0.0, 50.0);
+  const AnchorWindow r = only_radar.Update(1, arrived);
+  CheckFeatures(r, kRayDistanceOffset, {0.0, 0.0, 0.0, 0.0, 0.0, 0.0});
+}
+
+TEST_CASE("AnchorTracker: refuses a window length or scale that is not positive", "[pipeline]") {
+  const Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  CHECK_THROWS_AS(AnchorTracker(0.0, c, 1.0), std::invalid_argument);
+  CHECK_THROWS_AS(AnchorTracker(-0.2, c, 1.0), std::invalid_argument);
+  CHECK_THROWS_AS(AnchorTracker(std::nan(""), c, 1.0), std::invalid_argument);
+  CHECK_THROWS_AS(AnchorTracker(0.2, c, 0.0), std::invalid_argument);
+  CHECK_THROWS_AS(AnchorTracker(0.2, c, std::numeric_limits<double>::infinity()),
+                  std::invalid_argument);
+  CHECK_NOTHROW(AnchorTracker(0.2, c, 1.0));
+}
+
+TEST_CASE("TeAlign: LatestAnchors takes the latest anchored frame of the window", "[pipeline]") {
+  TeAlignConfig config;
+  config.latent_dim = 4;
+  const TeAlign align(config);
+  WindowInputs in;
+  in.window = 3;  // [0.4, 0.6)
+  const Eigen::Vector3d o(1.0, 2.0, 3.0);
+  auto& camera = in.frames[kCamera];
+  camera.push_back(Frame(0.61, Ray(o, {1.0, 0.0, 0.0})));  // next window: ignored
+  camera.push_back(Frame(0.55, Ray(o, {0.0, 1.0, 0.0})));  // the latest with a ray
+  camera.push_back(Frame(0.41, Ray(o, {0.0, 0.0, 1.0})));
+  camera.push_back(Frame(0.58, GeometricAnchor{}));         // later but nothing detected
+  camera.push_back(Frame(0.39, Ray(o, {-1.0, 0.0, 0.0})));  // previous window: ignored
+  auto& lidar = in.frames[kLidar];
+  lidar.push_back(Frame(0.45, Point(1.0, 1.0, 1.0)));
+  lidar.push_back(Frame(0.40, Point(2.0, 2.0, 2.0)));  // on the window's start
+  lidar.push_back(Frame(0.60, Point(3.0, 3.0, 3.0)));  // on the next window's start
+  auto& radar = in.frames[kRadar];
+  radar.push_back(Frame(0.30, Point(4.0, 4.0, 4.0)));  // previous window
+  radar.push_back(Frame(0.50, GeometricAnchor{}));
+  radar.push_back(Frame(0.70, Point(5.0, 5.0, 5.0)));  // later window
+
+  const auto latest = align.LatestAnchors(in);
+  REQUIRE(latest[kCamera].kind == Kind::kRay);
+  CheckVector(latest[kCamera].origin_w, o);
+  CheckVector(latest[kCamera].direction_w, {0.0, 1.0, 0.0});
+  REQUIRE(latest[kLidar].kind == Kind::kPoint);
+  CheckVector(latest[kLidar].origin_w, {1.0, 1.0, 1.0});
+  CHECK(latest[kRadar].kind == Kind::kNone);
+
+  // The latest frame wins whatever the order of arrival.
+  std::swap(lidar[0], lidar[1]);
+  CheckVector(align.LatestAnchors(in)[kLidar].origin_w, {1.0, 1.0, 1.0});
+  // An empty window has no anchors.
+  WindowInputs empty;
+  empty.window = 3;
+  for (const GeometricAnchor& a : align.LatestAnchors(empty)) CHECK(a.kind == Kind::kNone);
+}
+
+}  // namespace uavsim::pipeline
