@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -309,6 +310,16 @@ std::uint64_t UnsignedOption(const std::string& cmd, const std::string& name, co
   return std::stoull(v);
 }
 
+// A number in [lo, hi]; `what` says what is expected ("seconds from 1 to 3600").
+double NumberOption(const std::string& cmd, const std::string& name, const std::string& v,
+                    double lo, double hi, const std::string& what) {
+  char* end = nullptr;
+  const double x = std::strtod(v.c_str(), &end);
+  if (v.empty() || *end != '\0' || !(x >= lo && x <= hi))
+    throw UsageError("uavsim " + cmd + ": " + name + " expects " + what + ", got '" + v + "'");
+  return x;
+}
+
 int Train(int argc, char** argv) {
   const ParsedArgs a =
       Parse("train", argc, argv, 2,
@@ -328,25 +339,16 @@ int Train(int argc, char** argv) {
     c.episodes = static_cast<int>(UnsignedOption("train", "--episodes", *v, 100000));
   if (auto v = a.Value("--threads"))
     c.threads = static_cast<int>(UnsignedOption("train", "--threads", *v, 256));
-  if (auto v = a.Value("--episode-s")) {
-    char* end = nullptr;
-    c.episode_s = std::strtod(v->c_str(), &end);
-    if (v->empty() || *end != '\0' || !(c.episode_s >= 1.0 && c.episode_s <= 3600.0))
-      throw UsageError("uavsim train: --episode-s expects seconds from 1 to 3600, got '" + *v +
-                       "'");
-  }
+  if (auto v = a.Value("--episode-s"))
+    c.episode_s = NumberOption("train", "--episode-s", *v, 1.0, 3600.0, "seconds from 1 to 3600");
   if (auto v = a.Value("--bottleneck")) {
     if (*v != "ib" && *v != "mlp")
       throw UsageError("uavsim train: --bottleneck expects ib or mlp, got '" + *v + "'");
     c.mlp_bottleneck = *v == "mlp";
   }
-  if (auto v = a.Value("--selection-weight")) {
-    char* end = nullptr;
-    c.selection_weight = std::strtod(v->c_str(), &end);
-    if (v->empty() || *end != '\0' || !(c.selection_weight >= 0.0 && c.selection_weight <= 100.0))
-      throw UsageError("uavsim train: --selection-weight expects a number in [0, 100], got '" + *v +
-                       "'");
-  }
+  if (auto v = a.Value("--selection-weight"))
+    c.selection_weight =
+        NumberOption("train", "--selection-weight", *v, 0.0, 100.0, "a number in [0, 100]");
   if (auto v = a.Value("--plateau"))
     c.plateau_epochs = static_cast<int>(UnsignedOption("train", "--plateau", *v, 10000));
   if (auto v = a.Value("--head")) {
@@ -365,12 +367,9 @@ int Train(int argc, char** argv) {
           "uavsim train: --label-gate expects M,DEG (metres >= 0, degrees 0..180), got '" + *v +
           "'");
   }
-  if (auto v = a.Value("--lr")) {
-    char* end = nullptr;
-    c.learning_rate = std::strtod(v->c_str(), &end);
-    if (v->empty() || *end != '\0' || !(c.learning_rate > 0.0 && c.learning_rate <= 1.0))
-      throw UsageError("uavsim train: --lr expects a learning rate in (0, 1], got '" + *v + "'");
-  }
+  if (auto v = a.Value("--lr"))
+    c.learning_rate = NumberOption("train", "--lr", *v, std::nextafter(0.0, 1.0), 1.0,
+                                   "a learning rate in (0, 1]");
   if ((a.Value("--episodes") && c.episodes < 3) || (a.Value("--threads") && c.threads < 1))
     throw UsageError(
         "uavsim train: --episodes needs at least 3 (training, validation, test) and --threads "
