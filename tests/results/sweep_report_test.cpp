@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "results/csv.h"
 #include "results/plot.h"
 #include "test_support.h"
 
@@ -122,24 +123,13 @@ struct Csv {
   }
 };
 
-std::vector<std::string> Split(const std::string& line) {
-  std::vector<std::string> cells(1);
-  for (char c : line) {
-    if (c == ',')
-      cells.emplace_back();
-    else
-      cells.back() += c;
-  }
-  return cells;
-}
-
 Csv ParseCsv(const std::string& text) {
   Csv csv;
   std::size_t start = 0;
   while (start < text.size()) {
     const std::size_t end = text.find('\n', start);
     REQUIRE(end != std::string::npos);  // every line ends in a newline
-    std::vector<std::string> cells = Split(text.substr(start, end - start));
+    std::vector<std::string> cells = uavsim::results::SplitCsvLine(text.substr(start, end - start));
     if (csv.header.empty())
       csv.header = std::move(cells);
     else {

@@ -18,6 +18,7 @@
 #include "pipeline/model_bundle.h"
 #include "pipeline/torch_runtime.h"
 #include "pipeline/trainer.h"
+#include "results/csv.h"
 #include "sim/core/json_io.h"
 #include "sim/train.h"
 #include "test_support.h"
@@ -113,12 +114,7 @@ TEST_CASE("CLI: train --quick learns, is deterministic, and its model runs in th
     std::istringstream in(text);
     std::string line;
     std::getline(in, line);  // header
-    while (std::getline(in, line)) {
-      std::vector<std::string> cells;
-      std::istringstream l(line);
-      for (std::string c; std::getline(l, c, ',');) cells.push_back(c);
-      out.push_back(cells);
-    }
+    while (std::getline(in, line)) out.push_back(uavsim::results::SplitCsvLine(line));
     return out;
   };
   const auto ms = [](const std::string& t) { return std::lround(std::stod(t) * 1000.0); };
