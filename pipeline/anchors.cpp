@@ -67,22 +67,61 @@ AnchorTracker::AnchorTracker(double window_s, const Eigen::Vector3d& centre_m, d
     throw std::invalid_argument("AnchorTracker: window_s and scale_m must be finite and > 0");
 }
 
-void AnchorTracker::Reset() { held_ = {}; }
+void AnchorTracker::Reset() { held_ = {}, gated_ = {}; }
+
+namespace {
+
+// A held point's position and range at t_end: carried forward at the rate of
+// its last two fixes when they give a plausible one (`moving`), else as last
+// seen.
+struct CarriedPoint {
+  Eigen::Vector3d p = Eigen::Vector3d::Zero();
+  double range_m = 0.0;
+  bool moving = false;
+};
+
+}  // namespace
+
+bool AnchorTracker::Consistent(Modality m, const GeometricAnchor& point) const {
+  const Held& camera = held_[static_cast<int>(Modality::kCamera)];
+  if (!camera.window || std::abs(point.t_s - camera.anchor.t_s) > kGateMaxAge_s) return false;
+  const GeometricAnchor& r = camera.anchor;
+  if (m == Modality::kLidar)
+    return (point.origin_w - ProjectOntoRay(point.origin_w, r.origin_w, r.direction_w)).norm() <=
+           kLidarGate_m;
+  return (point.origin_w -
+          RangeOnRay(point.sensor_w, point.range_m, point.origin_w, r.origin_w, r.direction_w))
+             .norm() <= kRadarGate_m;
+}
+
+void AnchorTracker::Held::Take(std::int64_t k, const GeometricAnchor& a) {
+  if (window) previous = anchor;
+  window = k;
+  anchor = a;
+}
 
 AnchorWindow AnchorTracker::Update(std::int64_t k,
                                    const std::array<GeometricAnchor, kModalityCount>& arrived) {
-  for (int m = 0; m < kModalityCount; ++m)
-    if (arrived[static_cast<std::size_t>(m)].kind != GeometricAnchor::Kind::kNone) {
-      Held& h = held_[static_cast<std::size_t>(m)];
-      if (h.window) h.previous = h.anchor;
-      h.window = k;
-      h.anchor = arrived[static_cast<std::size_t>(m)];
-    }
+  const double t_end = static_cast<double>(k) * window_s_;
+  // The camera first: this window's ray gates this window's points.
+  const auto camera_index = static_cast<std::size_t>(Modality::kCamera);
+  if (arrived[camera_index].kind != GeometricAnchor::Kind::kNone)
+    held_[camera_index].Take(k, arrived[camera_index]);
+  for (const Modality m : {Modality::kLidar, Modality::kRadar}) {
+    const GeometricAnchor& a = arrived[static_cast<std::size_t>(m)];
+    if (a.kind == GeometricAnchor::Kind::kNone) continue;
+    held_[static_cast<std::size_t>(m)].Take(k, a);
+    if (Consistent(m, a)) gated_[static_cast<std::size_t>(m) - 1].Take(k, a);
+  }
 
   const Held& camera = held_[static_cast<int>(Modality::kCamera)];
   const Held& lidar = held_[static_cast<int>(Modality::kLidar)];
   const Held& radar = held_[static_cast<int>(Modality::kRadar)];
-  const bool ray = camera.window.has_value();
+  // Anchors older than kMaxAge_s give no candidates.
+  const auto usable = [&](const Held& h) {
+    return h.window.has_value() && t_end - h.anchor.t_s <= kMaxAge_s;
+  };
+  const bool ray = usable(camera);
   const auto normalised = [&](const Eigen::Vector3d& p) -> Eigen::Vector3d {
     return (p - centre_m_) / scale_m_;
   };
@@ -94,29 +133,45 @@ AnchorWindow AnchorTracker::Update(std::int64_t k,
     w.candidates[static_cast<std::size_t>(i)] = valid ? normalised(p_w) : Eigen::Vector3d::Zero();
   };
   const GeometricAnchor& r = camera.anchor;
-  // Each ranging sensor's point and range at the end of window k: carried
-  // forward at the rate of its last two fixes when they give a plausible
-  // one, else as last seen.
-  const double t_end = static_cast<double>(k) * window_s_;
-  std::array<bool, 2> moving{};
-  for (const auto& [j, h] : {std::pair{0, &lidar}, std::pair{1, &radar}}) {
-    Eigen::Vector3d p = h->anchor.origin_w;
-    double range = h->anchor.range_m;
-    if (h->window && h->previous) {
-      const double dt = h->anchor.t_s - h->previous->t_s;
-      const Eigen::Vector3d v = (h->anchor.origin_w - h->previous->origin_w) / dt;
-      moving[j] = dt >= kMinFixGap_s && dt <= kMaxFixGap_s && v.norm() <= kMaxSpeed_mps;
-      if (moving[j]) {
-        const double age = std::max(0.0, t_end - h->anchor.t_s);
-        p += v * age;
-        range += (h->anchor.range_m - h->previous->range_m) / dt * age;
-      }
+  if (ray) {
+    const Eigen::Vector3d o = normalised(r.origin_w);
+    w.ray = {1.0f,
+             static_cast<float>(o.x()),
+             static_cast<float>(o.y()),
+             static_cast<float>(o.z()),
+             static_cast<float>(r.direction_w.x()),
+             static_cast<float>(r.direction_w.y()),
+             static_cast<float>(r.direction_w.z())};
+  }
+  const auto carried = [&](const Held& h) {
+    CarriedPoint c{h.anchor.origin_w, h.anchor.range_m, false};
+    if (!h.window || !h.previous) return c;
+    const double dt = h.anchor.t_s - h.previous->t_s;
+    const Eigen::Vector3d v = (h.anchor.origin_w - h.previous->origin_w) / dt;
+    const double range_rate = (h.anchor.range_m - h.previous->range_m) / dt;
+    c.moving = dt >= kMinFixGap_s && dt <= kMaxFixGap_s && v.norm() <= kMaxSpeed_mps &&
+               std::abs(range_rate) <= kMaxSpeed_mps;
+    if (c.moving) {
+      const double age = std::clamp(t_end - h.anchor.t_s, 0.0, kMaxCarry_s);
+      c.p += v * age;
+      c.range_m += range_rate * age;
     }
-    const bool seen = h->window.has_value();
-    candidate(j, seen, p);
-    candidate(2 + j, seen && ray, ProjectOntoRay(p, r.origin_w, r.direction_w));
-    candidate(4 + j, seen && ray,
-              RangeOnRay(h->anchor.sensor_w, range, p, r.origin_w, r.direction_w));
+    return c;
+  };
+  // Each ranging sensor's point as held, and its fixes consistent with the
+  // camera's ray on (or at the range of) the held ray.
+  std::array<bool, 2> moving{}, gated_moving{};
+  for (const auto& [j, h] : {std::pair{0, &lidar}, std::pair{1, &radar}}) {
+    const CarriedPoint c = carried(*h);
+    moving[static_cast<std::size_t>(j)] = c.moving;
+    candidate(j, usable(*h), c.p);
+    const Held& g = gated_[static_cast<std::size_t>(j)];
+    const CarriedPoint cg = carried(g);
+    gated_moving[static_cast<std::size_t>(j)] = cg.moving;
+    const bool valid = usable(g) && ray;
+    candidate(2 + j, valid, ProjectOntoRay(cg.p, r.origin_w, r.direction_w));
+    candidate(4 + j, valid,
+              RangeOnRay(g.anchor.sensor_w, cg.range_m, cg.p, r.origin_w, r.direction_w));
   }
   for (int i = 0; i < kAnchorCandidates; ++i) {
     w.features[static_cast<std::size_t>(f++)] = w.valid[static_cast<std::size_t>(i)];
@@ -147,6 +202,10 @@ AnchorWindow AnchorTracker::Update(std::int64_t k,
   w.features[static_cast<std::size_t>(f++)] = static_cast<float>(std::min(lr / scale_m_, 4.0));
   for (int c = 0; c < 3; ++c)
     w.features[static_cast<std::size_t>(f++)] = ray ? static_cast<float>(r.direction_w[c]) : 0.0f;
+  for (double unit : {kMaxAge_s, kFineAge_s})
+    for (const Held& h : gated_)
+      w.features[static_cast<std::size_t>(f++)] = static_cast<float>(std::min(age(h) / unit, 1.0));
+  for (bool m : gated_moving) w.features[static_cast<std::size_t>(f++)] = m ? 1.0f : 0.0f;
   if (f != kAnchorFeatures)
     throw std::logic_error("AnchorTracker: wrote " + std::to_string(f) + " features");
   return w;

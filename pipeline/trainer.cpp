@@ -362,21 +362,31 @@ torch::Tensor ForwardSequence(UavLocModel& model, const WindowSequence& s,
   return model->forward((s.latents * mask.unsqueeze(2)).unsqueeze(0), mask.unsqueeze(0), &anchors);
 }
 
-// Cross-entropy of the anchored head's candidate weights log_w [B, K, C + 1]
-// against the valid candidate nearest the truth [B, K, 3] if within `radius`
-// (normalised), else the free candidate; mean over the estimated windows.
-torch::Tensor SelectionLoss(const torch::Tensor& log_w, const AnchorBatch& anchors,
+// Cross-entropy of the anchored head's weights log_w [B, K, H] over its
+// hypotheses h [B, K, H, 3] against the valid candidate nearest the truth
+// [B, K, 3] if within `radius` (normalised), else the nearer of the two
+// free hypotheses; mean over the estimated windows.
+torch::Tensor SelectionLoss(const torch::Tensor& log_w, const torch::Tensor& h,
                             const torch::Tensor& truth, const torch::Tensor& mask, double radius) {
   const torch::Tensor d =
-      (anchors.candidates - truth.unsqueeze(-2))
+      (h.detach() - truth.unsqueeze(-2))
           .norm(2, -1)
-          .masked_fill(anchors.valid < 0.5, std::numeric_limits<float>::infinity());
-  const auto [nearest, index] = d.min(-1);
-  const torch::Tensor target =
-      torch::where(nearest < radius, index,
-                   torch::full_like(index, static_cast<std::int64_t>(kAnchorCandidates)));
+          .masked_fill(~torch::isfinite(log_w.detach()), std::numeric_limits<float>::infinity());
+  const auto [nearest, index] = d.narrow(-1, 0, kAnchorCandidates).min(-1);
+  const torch::Tensor free = d.narrow(-1, kAnchorCandidates, 2).argmin(-1) + kAnchorCandidates;
+  const torch::Tensor target = torch::where(nearest < radius, index, free);
   const torch::Tensor w = EstimatedWindows(mask);
   return -(log_w.gather(-1, target.unsqueeze(-1)).squeeze(-1) * w).sum() / w.sum().clamp_min(1.0);
+}
+
+// The expected squared error of the anchored head's hypotheses h [B, K, H,
+// 3] under their weights exp(log_w) [B, K, H] against the truth [B, K, 3],
+// over the estimated windows.
+torch::Tensor MixtureMse(const torch::Tensor& log_w, const torch::Tensor& h,
+                         const torch::Tensor& truth, const torch::Tensor& mask) {
+  const torch::Tensor w = EstimatedWindows(mask);
+  const torch::Tensor expected = (log_w.exp() * (h - truth.unsqueeze(-2)).square().sum(-1)).sum(-1);
+  return (expected * w).sum() / w.sum().clamp_min(1.0);
 }
 
 double FusionValidationLoss(UavLocModel& model, const std::vector<WindowSequence>& val) {
@@ -451,13 +461,15 @@ UavLocModel TrainFusion(const std::vector<WindowSequence>& train,
           const CropBatch b = DrawCrops(train, o.stage2_batch, k, o, config);
           if (o.check_stop) o.check_stop();
           adam.zero_grad();
-          torch::Tensor log_w;
-          torch::Tensor loss =
-              MaskedMse(model->forward(b.fusion.latents, b.fusion.mask, &b.anchors, &log_w),
-                        b.truth, b.fusion.mask);
+          torch::Tensor log_w, hypotheses;
+          const torch::Tensor y_hat =
+              model->forward(b.fusion.latents, b.fusion.mask, &b.anchors, &log_w, &hypotheses);
+          torch::Tensor loss = config.anchored && o.mixture_loss
+                                   ? MixtureMse(log_w, hypotheses, b.truth, b.fusion.mask)
+                                   : MaskedMse(y_hat, b.truth, b.fusion.mask);
           if (config.anchored && o.selection_weight > 0.0)
             loss = loss + o.selection_weight *
-                              SelectionLoss(log_w, b.anchors, b.truth, b.fusion.mask,
+                              SelectionLoss(log_w, hypotheses, b.truth, b.fusion.mask,
                                             o.selection_radius_m / config.position_scale_m);
           loss.backward();
           adam.step();
@@ -640,8 +652,10 @@ std::string ReportJson(const TrainReport& r, const TrainOptions& o) {
   j["latent_dim"] = o.latent_dim;
   j["bottleneck"] = o.bottleneck == IbBottleneck::kIb ? "ib" : "mlp";
   j["head"] = o.anchored ? "anchored" : "paper";
-  if (o.anchored)
+  if (o.anchored) {
     j["selection_loss"] = {{"weight", o.selection_weight}, {"radius_m", o.selection_radius_m}};
+    j["position_loss"] = o.mixture_loss ? "mixture" : "mean";
+  }
   j["stage2_plateau_epochs"] = o.stage2_plateau_epochs;
   j["learning_rate"] = {{"stage1", o.stage1_lr}, {"stage2", o.stage2_lr}};
   j["stage1_label_gate"] = {{"m", o.stage1_label_gate_m}, {"deg", o.stage1_label_gate_deg}};

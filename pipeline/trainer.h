@@ -72,13 +72,20 @@ struct TrainOptions {
   // The edge head: anchored (default; pipeline/anchors.h, measured in
   // NOTES.md) or the paper's plain linear head (false).
   bool anchored = true;
-  // Anchored head: weight of the candidate-selection loss added to the MSE,
-  // the cross-entropy of the candidate weights against the valid candidate
-  // nearest the truth when it is within selection_radius_m, else the free
-  // one (it teaches the choice directly; the MSE alone left the weights
-  // spread, NOTES.md). 0: MSE only.
+  // Anchored head: weight of the candidate-selection loss added to the
+  // position loss, the cross-entropy of the candidate weights against the
+  // valid candidate nearest the truth when it is within selection_radius_m,
+  // else the free one (it teaches the choice directly; the MSE alone left
+  // the weights spread, NOTES.md). 0: position loss only.
   double selection_weight = 1.0;
   double selection_radius_m = 2.0;
+  // Anchored head: the position loss. true: the expected squared error of
+  // the weighted hypotheses, sum_h w_h |c_h - y|^2 (a mixture: weight on a
+  // far candidate costs its whole error, so the weights concentrate on the
+  // good ones); false: the squared error of the weighted mean |sum_h w_h
+  // c_h - y|^2 (a hedge between two far candidates costs little). The
+  // validation loss is the weighted mean's in both cases.
+  bool mixture_loss = true;
 
   // Throws std::invalid_argument naming the first bad field.
   void Validate() const;

@@ -35,6 +35,7 @@ void Visit(V& v, UavLocModelConfig& c) {
   v("d_conv", c.d_conv, Rule::Range(1, 256));
   v("expand", c.expand, Rule::Range(1, 64));
   v("anchored", c.anchored);
+  v("anchor_features", c.anchor_features);
   v("position_centre_m", c.position_centre_m);
   v("position_scale_m", c.position_scale_m, Rule::Positive());
 }
@@ -53,7 +54,7 @@ MambaRegressorOptions UavLocModelConfig::regressor() const {
   MambaRegressorOptions r;
   r.input_dim = kModalityCount * latent_dim;  // Eq. (26): the concatenation
   r.output_dim = 3;
-  if (anchored) r.input_dim += kAnchorFeatures, r.output_dim += kAnchorCandidates + 1 + 3;
+  if (anchored) r.input_dim += kAnchorFeatures, r.output_dim = UavLocModelImpl::kHypotheses + 3 + 1;
   r.layers = layers;
   r.mamba.d_model = d_model;
   r.mamba.d_state = d_state;
@@ -73,6 +74,11 @@ void UavLocModelConfig::Validate() const {
                                 ") must be >= 1");
   if (!std::isfinite(lambda_init))
     throw std::invalid_argument("UavLocModel: lambda_init must be finite");
+  if (anchored && anchor_features != kAnchorFeatures)
+    throw std::invalid_argument(
+        "UavLocModel: an anchored head with " + std::to_string(anchor_features) +
+        " anchor features (this build's has " + std::to_string(kAnchorFeatures) +
+        "): train the model again (uavsim train)");
   if (!position_centre_m.allFinite() || !std::isfinite(position_scale_m) || position_scale_m <= 0.0)
     throw std::invalid_argument(
         "UavLocModel: position_centre_m must be finite and position_scale_m finite and > 0, got " +
@@ -107,7 +113,8 @@ torch::Tensor UavLocModelImpl::Fuse(const torch::Tensor& latents, const torch::T
 }
 
 torch::Tensor UavLocModelImpl::forward(const torch::Tensor& latents, const torch::Tensor& mask,
-                                       const AnchorBatch* anchors, torch::Tensor* log_weights) {
+                                       const AnchorBatch* anchors, torch::Tensor* log_weights,
+                                       torch::Tensor* hypotheses) {
   const int64_t z = config_.latent_dim;
   TORCH_CHECK(latents.dim() == 4 && latents.size(2) == kModalityCount && latents.size(3) == z,
               "UavLocModel: latents must be [B, K, ", kModalityCount, ", ", z, "], got ",
@@ -127,30 +134,36 @@ torch::Tensor UavLocModelImpl::forward(const torch::Tensor& latents, const torch
               "UavLocModel: anchor features must be [B, K, ", kAnchorFeatures, "], got ",
               anchors->features.sizes());
   return Anchored(regressor(torch::cat({fused, anchors->features}, 2)), anchors->candidates,
-                  anchors->valid, log_weights);
+                  anchors->valid, anchors->ray, log_weights, hypotheses);
 }
 
 torch::Tensor UavLocModelImpl::Anchored(const torch::Tensor& head, const torch::Tensor& candidates,
-                                        const torch::Tensor& valid,
-                                        torch::Tensor* log_weights) const {
+                                        const torch::Tensor& valid, const torch::Tensor& ray,
+                                        torch::Tensor* log_weights,
+                                        torch::Tensor* hypotheses) const {
   const int64_t c = kAnchorCandidates;
   TORCH_CHECK(candidates.dim() == head.dim() + 1 && candidates.size(-2) == c &&
                   candidates.size(-1) == 3 && valid.size(-1) == c,
               "UavLocModel: anchor candidates must be [..., ", c, ", 3], got ", candidates.sizes());
-  const torch::Tensor residual = head.narrow(-1, 0, 3);
-  const torch::Tensor logits = head.narrow(-1, 3, c + 1);
-  const torch::Tensor free = head.narrow(-1, 3 + c + 1, 3);
-  // The free candidate is always valid.
-  std::vector<int64_t> one_shape = valid.sizes().vec();
-  one_shape.back() = 1;
-  const torch::Tensor allowed = torch::cat({valid, torch::ones(one_shape, valid.options())}, -1);
+  TORCH_CHECK(ray.dim() == head.dim() && ray.size(-1) == 7,
+              "UavLocModel: anchor rays must be [..., 7], got ", ray.sizes());
+  // The free hypotheses: the held ray's point at the learned range (allowed
+  // when a ray is held) and the learned absolute position (always).
+  const torch::Tensor ray_valid = ray.narrow(-1, 0, 1);
+  const torch::Tensor on_ray =
+      ray.narrow(-1, 1, 3) + torch::softplus(head.narrow(-1, c + 5, 1)) * ray.narrow(-1, 4, 3);
+  const torch::Tensor allowed = torch::cat({valid, ray_valid, torch::ones_like(ray_valid)}, -1);
+  const torch::Tensor logits = head.narrow(-1, 0, kHypotheses);
   const torch::Tensor log_w = torch::log_softmax(
       logits.masked_fill(allowed < 0.5, -std::numeric_limits<float>::infinity()), -1);
+  // [..., C + 2, 3]; a ray-less window's on-ray point is only the origin
+  // row of zeros, weighed 0.
+  const torch::Tensor h = torch::cat(
+      {candidates, (on_ray * ray_valid).unsqueeze(-2), head.narrow(-1, c + 2, 3).unsqueeze(-2)},
+      -2);
   if (log_weights) *log_weights = log_w;
-  const torch::Tensor weights = log_w.exp();
-  const torch::Tensor w = weights.narrow(-1, 0, c);
-  return (w.unsqueeze(-1) * candidates).sum(-2) + w.sum(-1, true) * residual +
-         weights.narrow(-1, c, 1) * free;
+  if (hypotheses) *hypotheses = h;
+  return (log_w.exp().unsqueeze(-1) * h).sum(-2);
 }
 
 void UavLocModelImpl::ResetState() {
@@ -174,7 +187,7 @@ torch::Tensor UavLocModelImpl::StepAligned(const AlignedWindow& window,
   if (!config_.anchored) return regressor->Step(Fuse(latents, mask), &state_);
   const AnchorBatch a = StackAnchors({{anchors}});
   const torch::Tensor x = torch::cat({Fuse(latents, mask), a.features[0]}, 1);
-  return Anchored(regressor->Step(x, &state_), a.candidates[0], a.valid[0]);
+  return Anchored(regressor->Step(x, &state_), a.candidates[0], a.valid[0], a.ray[0]);
 }
 
 Eigen::Vector3d UavLocModelImpl::Step(const WindowInputs& window) {
@@ -274,14 +287,17 @@ AnchorBatch StackAnchors(const std::vector<std::vector<AnchorWindow>>& sequences
   out.features = torch::empty({b, k, kAnchorFeatures});
   out.candidates = torch::empty({b, k, c, 3});
   out.valid = torch::empty({b, k, c});
+  out.ray = torch::empty({b, k, 7});
   float* f = out.features.data_ptr<float>();
   float* p = out.candidates.data_ptr<float>();
   float* v = out.valid.data_ptr<float>();
+  float* r = out.ray.data_ptr<float>();
   for (const std::vector<AnchorWindow>& seq : sequences) {
     if (static_cast<int64_t>(seq.size()) != k)
       throw std::invalid_argument("StackAnchors: sequences differ in length");
     for (const AnchorWindow& w : seq) {
       f = std::copy(w.features.begin(), w.features.end(), f);
+      r = std::copy(w.ray.begin(), w.ray.end(), r);
       for (int i = 0; i < c; ++i) {
         for (int j = 0; j < 3; ++j) *p++ = static_cast<float>(w.candidates[i][j]);
         *v++ = w.valid[i];
@@ -315,7 +331,10 @@ void SaveUavLocModel(const UavLocModel& model, const std::string& path) {
 UavLocModel LoadUavLocModel(const std::string& path) {
   const std::string sidecar = SidecarPath(path);
   UavLocModelConfig config;
-  core::FromJson(core::LoadJsonFile(sidecar), sidecar, "", config);
+  const core::Json json = core::LoadJsonFile(sidecar);
+  core::FromJson(json, sidecar, "", config);
+  // Anchored models from before the key existed had 41 features.
+  if (config.anchored && !json.contains("anchor_features")) config.anchor_features = 41;
   try {
     config.Validate();
   } catch (const std::invalid_argument& e) {

@@ -52,11 +52,24 @@ struct UavLocModelConfig {
   int expand = 2;
   // The paper's head regresses the position from the Mamba output alone.
   // Anchored (pipeline/anchors.h): the anchor features join t^f at the Mamba
-  // input, and the head gives a residual r, logits over the window's valid
-  // candidates c_i plus a free one, and the free one's position a (the paper
-  // head's absolute regression, for windows with no good candidate):
-  //   p = sum_i w_i (c_i + r) + w_free a,  w = softmax(logits).
+  // input, and the head gives logits over the window's valid candidates c_i
+  // and two free hypotheses: the held camera ray's point at a learned range
+  // t, f = o + t d (t = softplus; the ray's bearing is good to 0.1 degree;
+  // allowed when a ray is held), and a learned absolute position a (the
+  // paper head's regression; always allowed):
+  //   p = sum_i w_i c_i + w_f f + w_a a,  w = softmax over the allowed ones.
+  // (An absolute free candidate alone took up to 0.9 of the weight where it
+  // was 5 m off and a candidate 0.5 m; without a free candidate the head had
+  // to follow the radar's cluster where it was the only one, 50-100 m off;
+  // NOTES.md 2026-11-22 (5).)
+  // (The first anchored head added a learned residual r to every candidate:
+  // at the default run's scale it was half a metre off where the candidates
+  // were 0.1 m off; see NOTES.md 2026-11-22 (5).)
   bool anchored = false;
+  // The anchor features the model was trained with: must be this build's
+  // kAnchorFeatures (41 for the first anchored head, with the residual:
+  // such models need training again).
+  int anchor_features = kAnchorFeatures;
   // Output normalisation: the head predicts (p - centre) / scale, p in
   // world ENU metres.
   Eigen::Vector3d position_centre_m = Eigen::Vector3d::Zero();
@@ -84,10 +97,11 @@ class UavLocModelImpl : public torch::nn::Module {
   // the normalised positions [B, K, 3]. Each sequence starts from a zero
   // Mamba state. Throws c10::Error for wrong shapes or missing anchors. An
   // anchored model sets *log_weights (when given) to the log of the
-  // candidates' weights [B, K, C + 1] (last: the free one; -inf: invalid).
+  // hypotheses' weights [B, K, kHypotheses] (-inf: not allowed) and
+  // *hypotheses to their positions [B, K, kHypotheses, 3].
   torch::Tensor forward(const torch::Tensor& latents, const torch::Tensor& mask,
                         const struct AnchorBatch* anchors = nullptr,
-                        torch::Tensor* log_weights = nullptr);
+                        torch::Tensor* log_weights = nullptr, torch::Tensor* hypotheses = nullptr);
 
   // MADW, MICA and concatenation of independent windows: [N, M, z], [N, M]
   // -> t^f [N, M z].
@@ -103,6 +117,8 @@ class UavLocModelImpl : public torch::nn::Module {
   // Forgets the recurrent state and the previous window.
   void ResetState();
   static constexpr int kMaxGapWindows = 50;
+  // An anchored head's hypotheses: the candidates, the ray's point, a.
+  static constexpr int kHypotheses = kAnchorCandidates + 2;
 
   torch::Tensor NormalizePosition(const torch::Tensor& position_m) const;  // [..., 3]
   torch::Tensor PositionInMetres(const torch::Tensor& normalized) const;   // [..., 3]
@@ -118,9 +134,12 @@ class UavLocModelImpl : public torch::nn::Module {
 
  private:
   torch::Tensor StepAligned(const AlignedWindow& window, const AnchorWindow& anchors);
-  // The head's output [..., 3 + C + 1] -> position [..., 3] (anchored models).
+  // The head's output [..., kHypotheses + 4] (logits, a, t) -> position
+  // [..., 3] (anchored models).
   torch::Tensor Anchored(const torch::Tensor& head, const torch::Tensor& candidates,
-                         const torch::Tensor& valid, torch::Tensor* log_weights = nullptr) const;
+                         const torch::Tensor& valid, const torch::Tensor& ray,
+                         torch::Tensor* log_weights = nullptr,
+                         torch::Tensor* hypotheses = nullptr) const;
 
   UavLocModelConfig config_;
   TeAlign te_align_;
@@ -144,6 +163,7 @@ FusionBatch StackWindows(const std::vector<std::vector<AlignedWindow>>& sequence
 // sequences differ in length or are empty.
 struct AnchorBatch {
   torch::Tensor features, candidates, valid;
+  torch::Tensor ray;  // [B, K, 7]: AnchorWindow::ray
 };
 AnchorBatch StackAnchors(const std::vector<std::vector<AnchorWindow>>& sequences);
 

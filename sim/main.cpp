@@ -112,7 +112,7 @@ const char* kSweepHelp =
 const char* kTrainHelp =
     "usage: uavsim train SCENARIO.json [--out MODEL] [--quick] [--seed N] [--episodes N]\n"
     "                    [--episode-s S] [--lr RATE] [--bottleneck ib|mlp] [--head H]\n"
-    "                    [--selection-weight W] [--plateau N]\n"
+    "                    [--selection-weight W] [--plateau N] [--position-loss L]\n"
     "                    [--threads N] [--data FILE] [--label-gate M,DEG] [--set /ptr=value]\n"
     "                    [--force] [--quiet]\n"
     "\n"
@@ -134,11 +134,13 @@ const char* kTrainHelp =
     "  --bottleneck B ib (default: the paper's IB-CC head, mu/sigma and KL) or mlp (its\n"
     "                 MLP baseline of equal depth and parameter count, no KL)\n"
     "  --head H       anchored (default: the Mamba output picks among the nodes' geometric\n"
-    "                 anchors and adds a residual; see NOTES.md) or paper (its linear head)\n"
+    "                 anchors; see NOTES.md) or paper (its linear head)\n"
     "  --selection-weight W  anchored head: weight of the candidate-selection loss\n"
     "                 (default 1; 0: position MSE only)\n"
     "  --plateau N    halve the stage-2 learning rate after N epochs without a better\n"
     "                 validation loss (default 6; 0: never)\n"
+    "  --position-loss L  anchored head: mixture (default: the weighted candidates' expected\n"
+    "                 squared error) or mean (the squared error of their weighted mean)\n"
     "  --threads N    LibTorch threads (default 1); results depend on it\n"
     "  --data FILE    the simulated episodes: read FILE if it exists (no simulation),\n"
     "                 else simulate and write it (train again without simulating)\n"
@@ -321,11 +323,11 @@ double NumberOption(const std::string& cmd, const std::string& name, const std::
 }
 
 int Train(int argc, char** argv) {
-  const ParsedArgs a =
-      Parse("train", argc, argv, 2,
-            {"--out", "--seed", "--episodes", "--episode-s", "--threads", "--set", "--data", "--lr",
-             "--bottleneck", "--label-gate", "--head", "--selection-weight", "--plateau"},
-            {"--quick", "--quiet", "--force", "--help"});
+  const ParsedArgs a = Parse("train", argc, argv, 2,
+                             {"--out", "--seed", "--episodes", "--episode-s", "--threads", "--set",
+                              "--data", "--lr", "--bottleneck", "--label-gate", "--head",
+                              "--selection-weight", "--plateau", "--position-loss"},
+                             {"--quick", "--quiet", "--force", "--help"});
   if (a.Has("--help")) return std::cout << kTrainHelp, kExitOk;
   const std::string& file = OneScenario("train", a);
   uavsim::sim::TrainCommand c;
@@ -351,6 +353,11 @@ int Train(int argc, char** argv) {
         NumberOption("train", "--selection-weight", *v, 0.0, 100.0, "a number in [0, 100]");
   if (auto v = a.Value("--plateau"))
     c.plateau_epochs = static_cast<int>(UnsignedOption("train", "--plateau", *v, 10000));
+  if (auto v = a.Value("--position-loss")) {
+    if (*v != "mixture" && *v != "mean")
+      throw UsageError("uavsim train: --position-loss expects mixture or mean, got '" + *v + "'");
+    c.position_loss = *v;
+  }
   if (auto v = a.Value("--head")) {
     if (*v != "anchored" && *v != "paper")
       throw UsageError("uavsim train: --head expects anchored or paper, got '" + *v + "'");

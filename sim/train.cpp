@@ -199,6 +199,7 @@ pipeline::TrainReport RunTraining(const Scenario& base, const TrainCommand& c) {
   t.anchored = !c.paper_head;
   if (c.selection_weight >= 0) t.selection_weight = c.selection_weight;
   if (c.plateau_epochs >= 0) t.stage2_plateau_epochs = c.plateau_epochs;
+  if (!c.position_loss.empty()) t.mixture_loss = c.position_loss == "mixture";
   t.stage1_label_gate_m = c.label_gate_m;
   t.stage1_label_gate_deg = c.label_gate_deg;
   if (c.episodes > 0) plan.episodes = c.episodes;

@@ -1,7 +1,8 @@
 // Geometric anchors (pipeline/anchors.h): a node's anchor against its closed
 // form (centroid, ray), the projection onto a ray, the edge's tracker of held
-// anchors window by window (candidates and the 41 features worked out by
-// hand), and TE-Align's pick of a window's latest anchor.
+// anchors window by window (candidates, the gate against the camera's ray and
+// the 47 features worked out by hand), and TE-Align's pick of a window's
+// latest anchor.
 #include "pipeline/anchors.h"
 
 #include <array>
@@ -10,6 +11,7 @@
 #include <cstddef>
 #include <limits>
 #include <stdexcept>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -31,6 +33,8 @@ constexpr std::size_t kMovingOffset = 33;
 constexpr std::size_t kRayDistanceOffset = 35;
 constexpr std::size_t kLidarRadarOffset = 37;
 constexpr std::size_t kDirectionOffset = 38;
+constexpr std::size_t kGatedAgeOffset = 41;  // LiDAR, radar coarse, then fine
+constexpr std::size_t kGatedMovingOffset = 45;
 
 GeometricAnchor Point(double x, double y, double z, double t_s = 0.0) {
   GeometricAnchor a;
@@ -200,6 +204,7 @@ TEST_CASE("AnchorTracker: candidates and features window by window", "[pipeline]
     CheckFeatures(w, 0, std::vector<double>(24, 0.0));
     CheckFeatures(w, kAgeOffset,
                   {1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0});
+    CheckFeatures(w, kGatedAgeOffset, {1.0, 1.0, 1.0, 1.0, 0.0, 0.0});
   }
 
   SECTION("a LiDAR point, then a camera ray and a radar point, then nothing") {
@@ -227,7 +232,9 @@ TEST_CASE("AnchorTracker: candidates and features window by window", "[pipeline]
 
     // Window 2 [0.2, 0.4): a camera ray from the origin along +x (bearing not
     // unit) at 0.35 s and a radar point at 0.3 s, seen from the origin; the
-    // LiDAR point is held from window 1.
+    // LiDAR point is held from window 1. The radar point passes the gate: the
+    // x axis at its range sqrt(29) is |(5, 2, 0) - (sqrt(29), 0, 0)| = 2.04 m
+    // from it (<= 4); the LiDAR point came before any ray and did not.
     CameraObservation cam;
     cam.detected = true;
     cam.t_s = 0.35;
@@ -235,74 +242,85 @@ TEST_CASE("AnchorTracker: candidates and features window by window", "[pipeline]
     cam.bearing_left_w = {2.0, 0.0, 0.0};
     PointObservation radar;
     radar.channels = 5;
-    radar.values = {5, 4, 0, 0, 0};
+    radar.values = {5, 2, 0, 0, 0};
     radar.t_s = 0.3;
     arrived = {};
     arrived[kCamera] = AnchorOf(cam);
     arrived[kRadar] = AnchorOf(radar);
     const AnchorWindow w2 = tracker.Update(2, arrived);
     CheckCandidate(w2, 0, true, {1.0, 0.0, 0.0});
-    CheckCandidate(w2, 1, true, {0.4, 0.2, -0.3});  // ((5, 4, 0) - c) / 10
-    // LiDAR (11, 2, 3) onto the x axis: (11, 0, 0), normalised (1, -0.2, -0.3).
-    CheckCandidate(w2, 2, true, {1.0, -0.2, -0.3});
-    // Radar (5, 4, 0) onto the x axis: (5, 0, 0), normalised (0.4, -0.2, -0.3).
+    CheckCandidate(w2, 1, true, {0.4, 0.0, -0.3});  // ((5, 2, 0) - c) / 10
+    // No gated LiDAR fix: nothing of the LiDAR on the ray.
+    CheckCandidate(w2, 2, false);
+    CheckCandidate(w2, 4, false);
+    // Radar (5, 2, 0) onto the x axis: (5, 0, 0), normalised (0.4, -0.2, -0.3).
     CheckCandidate(w2, 3, true, {0.4, -0.2, -0.3});
-    // The x axis 10 m from the LiDAR at (1, 2, 3): (t - 1)^2 + 13 = 100, the
-    // crossing near (11, 2, 3) at t = 1 + sqrt(87).
-    CheckCandidate(w2, 4, true, {std::sqrt(87.0) / 10.0, -0.2, -0.3});
-    // The x axis sqrt(41) m from the radar at the origin: t = sqrt(41).
-    CheckCandidate(w2, 5, true, {(std::sqrt(41.0) - 1.0) / 10.0, -0.2, -0.3});
+    // The x axis sqrt(29) m from the radar at the origin: t = sqrt(29).
+    CheckCandidate(w2, 5, true, {(std::sqrt(29.0) - 1.0) / 10.0, -0.2, -0.3});
     // One fix each so far: nothing carried forward.
     CheckFeatures(w2, kMovingOffset, {0.0, 0.0});
     // At 0.4 s: camera 0.05 s old, LiDAR 0.3, radar 0.1.
     CheckFeatures(w2, kAgeOffset, {0.05 / 5.0, 0.3 / 5.0, 0.1 / 5.0, 0.05, 0.3, 0.1});
     CheckFeatures(w2, kFreshOffset, {1.0, 0.0, 1.0});
-    // LiDAR is sqrt(2^2 + 3^2) from the x axis, radar 4: in units of 5 m.
-    CheckFeatures(w2, kRayDistanceOffset, {std::sqrt(13.0) / 5.0, 4.0 / 5.0});
-    // |(11, 2, 3) - (5, 4, 0)| = |(6, -2, 3)| = 7, over the 10 m scale.
-    CheckFeatures(w2, kLidarRadarOffset, {0.7});
+    // LiDAR is sqrt(2^2 + 3^2) from the x axis, radar 2: in units of 5 m.
+    CheckFeatures(w2, kRayDistanceOffset, {std::sqrt(13.0) / 5.0, 2.0 / 5.0});
+    // |(11, 2, 3) - (5, 2, 0)| = |(6, 0, 3)| = sqrt(45), over the 10 m scale.
+    CheckFeatures(w2, kLidarRadarOffset, {std::sqrt(45.0) / 10.0});
     CheckFeatures(w2, kDirectionOffset, {1.0, 0.0, 0.0});
+    // The held ray for the head's free position: valid, origin (0 - c) / 10,
+    // direction.
+    const std::array<float, 7> ray2 = {1.0f, -0.1f, -0.2f, -0.3f, 1.0f, 0.0f, 0.0f};
+    for (std::size_t i = 0; i < 7; ++i) CHECK(w2.ray[i] == Approx(ray2[i]).margin(1e-7));
+    for (float v : w1.ray) CHECK(v == 0.0f);
+    // Gated: no LiDAR fix (saturated ages), the radar's 0.1 s old.
+    CheckFeatures(w2, kGatedAgeOffset, {1.0, 0.1 / 5.0, 1.0, 0.1, 0.0, 0.0});
 
     // Window 3: nothing arrives, everything is held and 0.2 s older.
     const AnchorWindow w3 = tracker.Update(3, {});
     for (int i = 0; i < 6; ++i) {
       const auto u = static_cast<std::size_t>(i);
-      CHECK(w3.valid[u] == 1.0f);
+      CHECK(w3.valid[u] == w2.valid[u]);
       CheckVector(w3.candidates[u], w2.candidates[u]);
     }
     CheckFeatures(w3, kAgeOffset,
                   {0.25 / 5.0, 0.5 / 5.0, 0.3 / 5.0, 0.25, 0.5, 0.3, 0.0, 0.0, 0.0});
-    CheckFeatures(w3, kRayDistanceOffset, {std::sqrt(13.0) / 5.0, 0.8, 0.7, 1.0, 0.0, 0.0});
+    CheckFeatures(w3, kRayDistanceOffset,
+                  {std::sqrt(13.0) / 5.0, 0.4, std::sqrt(45.0) / 10.0, 1.0, 0.0, 0.0});
+    CheckFeatures(w3, kGatedAgeOffset, {1.0, 0.3 / 5.0, 1.0, 0.3, 0.0, 0.0});
 
     // Window 20 (end 4.0 s): camera 3.65 s old, LiDAR 3.9, radar 3.7; the
     // fine ages saturate.
     const AnchorWindow w20 = tracker.Update(20, {});
     CheckFeatures(w20, kAgeOffset, {3.65 / 5.0, 3.9 / 5.0, 3.7 / 5.0, 1.0, 1.0, 1.0});
 
-    // Window 40 (end 8 s): all ages saturate.
-    const AnchorWindow w40 = tracker.Update(40, {});
-    CheckFeatures(w40, kAgeOffset, {1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0});
-    for (int i = 0; i < 6; ++i)
-      CHECK(w40.valid[static_cast<std::size_t>(i)] == 1.0f);  // held however old
-
-    // Window 41 (end 8.2 s): a new camera ray at 8.1 s replaces the old one:
+    // Window 21 (end 4.2 s): a new camera ray at 4.1 s replaces the old one:
     // from (1, 2, 3) along (0, 0.6, 0.8). LiDAR (11, 2, 3): p - o = (10, 0,
-    // 0), along 0, so the candidate is o + 1 d = (1, 2.6, 3.8), normalised
-    // (0, 0.06, 0.08), and the distance |(10, -0.6, -0.8)| = sqrt(101).
-    // Radar (5, 4, 0): p - o = (4, 2, -3), along 1.2 - 2.4 = -1.2, again
-    // o + d; distance |(4, 1.4, -3.8)| = sqrt(16 + 1.96 + 14.44).
+    // 0), along 0, at the distance |(10, -0.6, -0.8)| = sqrt(101). The gated
+    // radar (5, 2, 0): p - o = (4, 0, -3), along -2.4, so the candidate is
+    // o + 1 d = (1, 2.6, 3.8), normalised (0, 0.06, 0.08); distance
+    // |(4, -0.6, -3.8)| = sqrt(16 + 0.36 + 14.44).
     arrived = {};
-    arrived[kCamera] = Ray(centre, {0.0, 3.0, 4.0}, 8.1);
-    const AnchorWindow w41 = tracker.Update(41, arrived);
-    CheckCandidate(w41, 2, true, {0.0, 0.06, 0.08});
-    CheckCandidate(w41, 3, true, {0.0, 0.06, 0.08});
-    // Radar at sqrt(41) m from the origin along o + t d: t^2 + 7.2 t + 14 =
-    // 41, t = -3.6 + sqrt(39.96) (the other crossing is behind the eye).
-    const double t5 = -3.6 + std::sqrt(39.96);
-    CheckCandidate(w41, 5, true, {0.0, 0.06 * t5, 0.08 * t5});
-    CheckFeatures(w41, kAgeOffset, {0.1 / 5.0, 1.0, 1.0, 0.1, 1.0, 1.0, 1.0, 0.0, 0.0});
-    CheckFeatures(w41, kRayDistanceOffset,
-                  {std::sqrt(101.0) / 5.0, std::sqrt(32.4) / 5.0, 0.7, 0.0, 0.6, 0.8});
+    arrived[kCamera] = Ray(centre, {0.0, 3.0, 4.0}, 4.1);
+    const AnchorWindow w21 = tracker.Update(21, arrived);
+    CheckCandidate(w21, 2, false);
+    CheckCandidate(w21, 3, true, {0.0, 0.06, 0.08});
+    // Radar at sqrt(29) m from the origin along o + t d: t^2 + 7.2 t + 14 =
+    // 29, t = -3.6 + sqrt(27.96) (the other crossing is behind the eye).
+    const double t5 = -3.6 + std::sqrt(27.96);
+    CheckCandidate(w21, 5, true, {0.0, 0.06 * t5, 0.08 * t5});
+    CheckFeatures(w21, kAgeOffset, {0.1 / 5.0, 4.1 / 5.0, 3.9 / 5.0, 0.1, 1.0, 1.0, 1.0, 0.0, 0.0});
+    CheckFeatures(
+        w21, kRayDistanceOffset,
+        {std::sqrt(101.0) / 5.0, std::sqrt(30.8) / 5.0, std::sqrt(45.0) / 10.0, 0.0, 0.6, 0.8});
+
+    // Window 31 (end 6.2 s): the LiDAR and radar points are more than 5 s
+    // old and give no candidates; the ray (2.1 s) alone gives none either.
+    const AnchorWindow w31 = tracker.Update(31, {});
+    for (int i = 0; i < kAnchorCandidates; ++i) CheckCandidate(w31, i, false);
+    CheckFeatures(w31, kAgeOffset, {2.1 / 5.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0});
+    CheckFeatures(w31, kDirectionOffset, {0.0, 0.6, 0.8});
+    const std::array<float, 7> ray31 = {1.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.6f, 0.8f};
+    for (std::size_t i = 0; i < 7; ++i) CHECK(w31.ray[i] == Approx(ray31[i]).margin(1e-7));
 
     // Reset: nothing held any more.
     tracker.Reset();
@@ -311,6 +329,7 @@ TEST_CASE("AnchorTracker: candidates and features window by window", "[pipeline]
     CheckFeatures(r, 0, std::vector<double>(24, 0.0));
     CheckFeatures(r, kAgeOffset,
                   {1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0});
+    CheckFeatures(r, kGatedAgeOffset, {1.0, 1.0, 1.0, 1.0, 0.0, 0.0});
   }
 }
 
@@ -329,20 +348,27 @@ TEST_CASE("AnchorTracker: points carried forward at the velocity of their last t
   const AnchorWindow w1 = tracker.Update(1, arrived);
   CheckCandidate(w1, 0, true, {0.0, 0.0, 3.0});  // as seen: one fix
   CheckFeatures(w1, kMovingOffset, {0.0, 0.0});
-  // Window 3 [0.4, 0.6): a second LiDAR fix 2 m east, 0.4 s later: 5 m/s.
+  // Window 3 [0.4, 0.6): a second LiDAR fix 1 m east (within the 1.5 m
+  // gate of the ray), 0.4 s later: 2.5 m/s.
   arrived = {};
-  arrived[kLidar] = lidar_fix({2.0, 0.0, 30.0}, 0.5);
+  arrived[kLidar] = lidar_fix({1.0, 0.0, 30.0}, 0.5);
   const AnchorWindow w3 = tracker.Update(3, arrived);
   CheckFeatures(w3, kMovingOffset, {1.0, 0.0});
-  // At the window's end (0.6 s): 2 + 5 * 0.1 = 2.5 m east.
-  CheckCandidate(w3, 0, true, {0.25, 0.0, 3.0});
+  CheckFeatures(w3, kGatedMovingOffset, {1.0, 0.0});
+  // At the window's end (0.6 s): 1 + 2.5 * 0.1 = 1.25 m east.
+  CheckCandidate(w3, 0, true, {0.125, 0.0, 3.0});
   CheckCandidate(w3, 2, true, {0.0, 0.0, 3.0});  // onto the z axis
-  // The range 30 -> sqrt(904) in 0.4 s, carried 0.1 s on; the z axis at it.
-  const double range = std::sqrt(904.0) + (std::sqrt(904.0) - 30.0) / 0.4 * 0.1;
+  // The range 30 -> sqrt(901) in 0.4 s, carried 0.1 s on; the z axis at it.
+  const double range = std::sqrt(901.0) + (std::sqrt(901.0) - 30.0) / 0.4 * 0.1;
   CheckCandidate(w3, 4, true, {0.0, 0.0, range / 10.0});
   for (int i : {1, 3, 5}) CheckCandidate(w3, i, false);  // no radar
-  // Window 4, nothing new: 2 + 5 * 0.3 = 3.5 m east.
-  CheckCandidate(tracker.Update(4, {}), 0, true, {0.35, 0.0, 3.0});
+  // Window 4, nothing new: 1 + 2.5 * 0.3 = 1.75 m east.
+  CheckCandidate(tracker.Update(4, {}), 0, true, {0.175, 0.0, 3.0});
+  // Window 10 (end 2 s): carried for at most 1 s, 1 + 2.5 = 3.5 m east.
+  CheckCandidate(tracker.Update(10, {}), 0, true, {0.35, 0.0, 3.0});
+  // Window 27 (end 5.4 s): 4.9 s old, still held; window 28: 5.1 s, gone.
+  CheckCandidate(tracker.Update(27, {}), 0, true, {0.35, 0.0, 3.0});
+  CheckCandidate(tracker.Update(28, {}), 0, false);
 
   // Implausible speeds and fixes too far apart in time carry nothing: the
   // point stays as last seen.
@@ -361,6 +387,75 @@ TEST_CASE("AnchorTracker: points carried forward at the velocity of their last t
   const AnchorWindow sl = slow.Update(13, arrived);
   CheckCandidate(sl, 1, true, {0.1, 0.0, 3.0});
   CheckFeatures(sl, kMovingOffset, {0.0, 0.0});
+  // Just over and just under the 20 m/s bound, for the position and for
+  // the mean range.
+  for (const auto& [dx, dr, moving] : {std::tuple{4.2, 0.0, false}, std::tuple{3.8, 0.0, true},
+                                       std::tuple{1.0, 4.2, false}, std::tuple{1.0, -3.8, true}}) {
+    INFO("moved " << dx << " m, range " << dr << " m in 0.2 s");
+    AnchorTracker t(0.2, Eigen::Vector3d::Zero(), 10.0);
+    arrived = {};
+    arrived[kRadar] = Point(0.0, 0.0, 30.0, 0.1);
+    arrived[kRadar].range_m = 30.0;
+    t.Update(1, arrived);
+    arrived[kRadar] = Point(dx, 0.0, 30.0, 0.3);
+    arrived[kRadar].range_m = 30.0 + dr;
+    CheckFeatures(t.Update(2, arrived), kMovingOffset, {0.0, moving ? 1.0 : 0.0});
+  }
+}
+
+TEST_CASE("AnchorTracker: the ray's candidates take only the fixes that agree with the ray",
+          "[pipeline]") {
+  AnchorTracker tracker(0.2, Eigen::Vector3d::Zero(), 10.0);
+  std::array<GeometricAnchor, kModalityCount> arrived;
+  // Window 1: a ray from the origin along z at 0.1 s; a LiDAR fix 1.4 m off
+  // it (within the 1.5 m gate) at 0.15 s.
+  arrived[kCamera] = Ray(Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ(), 0.1);
+  arrived[kLidar] = Point(1.4, 0.0, 20.0, 0.15);
+  CheckCandidate(tracker.Update(1, arrived), 2, true, {0.0, 0.0, 2.0});
+  // Window 2: 1.6 m off the ray: held (candidate 0, carried at its 1 m/s
+  // from the last fix: 1.6 + 0.05 at 0.4 s) but not on the ray's side,
+  // which keeps the gated fix of window 1, 0.25 s old.
+  arrived = {};
+  arrived[kLidar] = Point(1.6, 0.0, 20.0, 0.35);
+  const AnchorWindow w2 = tracker.Update(2, arrived);
+  CheckCandidate(w2, 0, true, {0.165, 0.0, 2.0});
+  CheckCandidate(w2, 2, true, {0.0, 0.0, 2.0});
+  CheckFeatures(w2, kGatedAgeOffset, {0.25 / 5.0, 1.0, 0.25, 1.0, 0.0, 0.0});
+  // Window 3: (0, 0, 21) at 0.55 s, 0.45 s after the ray: gated. The gated
+  // fixes (1.4, 0, 20) at 0.15 s and (0, 0, 21) at 0.55 s give (-3.5, 0,
+  // 2.5) m/s; at 0.6 s z = 21.125, onto the ray (0, 0, 21.125).
+  arrived[kLidar] = Point(0.0, 0.0, 21.0, 0.55);
+  const AnchorWindow w3 = tracker.Update(3, arrived);
+  CheckCandidate(w3, 2, true, {0.0, 0.0, 2.1125});
+  CheckFeatures(w3, kGatedMovingOffset, {1.0, 0.0});
+  // Window 4: on the ray but 0.55 s after it: too far apart in time.
+  arrived[kLidar] = Point(0.0, 0.0, 21.0, 0.65);
+  const AnchorWindow w4 = tracker.Update(4, arrived);
+  CheckFeatures(w4, kGatedAgeOffset, {0.25 / 5.0, 1.0, 0.25, 1.0});
+  CheckFeatures(w4, kAgeOffset + 4, {0.15});  // the held (ungated) LiDAR fix
+
+  // The radar: its centroid against the ray's point at the radar's range
+  // (its angles are degrees off, its range is not). Radar at the origin, a
+  // fix at (3, 0, 20), range sqrt(409): the ray's point (0, 0, sqrt(409)) is
+  // sqrt(9 + (sqrt(409) - 20)^2) = 3.008 m away, within the 4 m gate; at
+  // (5, 0, 20) it is 5.04 m away.
+  for (const auto& [x, gated] : {std::pair{3.0, true}, std::pair{5.0, false}}) {
+    INFO("radar fix at x = " << x);
+    AnchorTracker r(0.2, Eigen::Vector3d::Zero(), 10.0);
+    arrived = {};
+    arrived[kCamera] = Ray(Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ(), 0.1);
+    arrived[kRadar] = Point(x, 0.0, 20.0, 0.1);
+    arrived[kRadar].range_m = std::hypot(x, 20.0);
+    const AnchorWindow w = r.Update(1, arrived);
+    CheckCandidate(w, 1, true, {x / 10.0, 0.0, 2.0});
+    if (gated) {
+      CheckCandidate(w, 3, true, {0.0, 0.0, 2.0});
+      CheckCandidate(w, 5, true, {0.0, 0.0, std::hypot(x, 20.0) / 10.0});
+    } else {
+      CheckCandidate(w, 3, false);
+      CheckCandidate(w, 5, false);
+    }
+  }
 }
 
 TEST_CASE("AnchorTracker: distance features are clipped at 4", "[pipeline]") {
@@ -371,8 +466,9 @@ TEST_CASE("AnchorTracker: distance features are clipped at 4", "[pipeline]") {
   arrived[kRadar] = Point(-19.0, 0.0, 50.0);  // 19 m: 3.8; |L - R| 49 m: 4.9 -> 4
   const AnchorWindow w = tracker.Update(7, arrived);
   CheckFeatures(w, kRayDistanceOffset, {4.0, 3.8, 4.0});
-  CheckCandidate(w, 2, true, {0.0, 0.0, 5.0});
-  CheckCandidate(w, 3, true, {0.0, 0.0, 5.0});
+  // Both far off the ray: neither passes the gate.
+  CheckCandidate(w, 2, false);
+  CheckCandidate(w, 3, false);
   // A single held anchor gives no LiDAR-radar distance.
   AnchorTracker only_radar(0.1, Eigen::Vector3d::Zero(), 10.0);
   arrived = {};

@@ -63,11 +63,16 @@ AnchorBatch RandomAnchors(int64_t b, int64_t k, double p_valid) {
   a.features = torch::randn({b, k, kAnchorFeatures});
   a.candidates = torch::randn({b, k, kAnchorCandidates, 3});
   a.valid = torch::bernoulli(torch::full({b, k, kAnchorCandidates}, p_valid));
+  // A held ray (valid, origin, unit direction) in about half the windows.
+  const torch::Tensor direction = torch::randn({b, k, 3});
+  a.ray = torch::cat({torch::bernoulli(torch::full({b, k, 1}, 0.5)), torch::randn({b, k, 3}),
+                      direction / direction.norm(2, -1, true)},
+                     -1);
   return a;
 }
 
 AnchorBatch Clone(const AnchorBatch& a) {
-  return {a.features.clone(), a.candidates.clone(), a.valid.clone()};
+  return {a.features.clone(), a.candidates.clone(), a.valid.clone(), a.ray.clone()};
 }
 
 Eigen::Vector3d RandomVector(torch::Generator& gen) {
@@ -82,23 +87,29 @@ WindowInputs RandomAnchoredWindow(std::int64_t k, int z, double drop,
                                   const Eigen::Vector3d& centre_m, double spread_m,
                                   torch::Generator& gen) {
   WindowInputs w = RandomWindow(k, z, drop, gen);
+  // A target per window; rays towards it, points near it (most of them
+  // within the tracker's gates), some far off.
+  const Eigen::Vector3d target = centre_m + spread_m * RandomVector(gen);
   for (int m = 0; m < kModalityCount; ++m)
     for (LatentFrame& f : w.frames[static_cast<std::size_t>(m)]) {
+      f.anchor.t_s = f.t_s;
       if (m == static_cast<int>(Modality::kCamera)) {
         if (torch::rand({1}, gen).item<double>() < 0.2) continue;
         f.anchor.kind = GeometricAnchor::Kind::kRay;
         f.anchor.origin_w = centre_m + 2.0 * spread_m * RandomVector(gen);
-        const Eigen::Vector3d target = centre_m + spread_m * RandomVector(gen);
         f.anchor.direction_w = (target - f.anchor.origin_w).normalized();
       } else {
+        const double off = torch::rand({1}, gen).item<double>() < 0.8 ? 0.3 : spread_m;
         f.anchor.kind = GeometricAnchor::Kind::kPoint;
-        f.anchor.origin_w = centre_m + spread_m * RandomVector(gen);
+        f.anchor.origin_w = target + off * RandomVector(gen);
+        f.anchor.sensor_w = centre_m + spread_m * RandomVector(gen);
+        f.anchor.range_m = (f.anchor.origin_w - f.anchor.sensor_w).norm();
       }
     }
   return w;
 }
 
-// The head's raw output [B, K, 3 + C + 1] for the given inputs, the way an
+// The head's raw output [B, K, C + 6] for the given inputs, the way an
 // anchored forward feeds the regressor: [t^f, anchor features].
 torch::Tensor HeadOutput(UavLocModel& model, const torch::Tensor& latents,
                          const torch::Tensor& mask, const AnchorBatch& anchors) {
@@ -176,7 +187,7 @@ TEST_CASE("UavLocModel anchored: shapes, and forward needs the anchors", "[pipel
   CHECK(model->regressor->embed->weight.sizes() ==
         torch::IntArrayRef({32, 3 * 8 + kAnchorFeatures}));
   CHECK(model->regressor->head->weight.sizes() ==
-        torch::IntArrayRef({3 + kAnchorCandidates + 1 + 3, 32}));
+        torch::IntArrayRef({UavLocModelImpl::kHypotheses + 4, 32}));
   const torch::Tensor latents = torch::randn({4, 10, 3, 8});
   const torch::Tensor mask = torch::bernoulli(torch::full({4, 10, 3}, 0.7));
   const AnchorBatch anchors = RandomAnchors(4, 10, 0.5);
@@ -194,7 +205,7 @@ TEST_CASE("UavLocModel anchored: shapes, and forward needs the anchors", "[pipel
   CHECK(torch::equal(plain(latents, mask, &anchors), plain(latents, mask)));
 }
 
-TEST_CASE("UavLocModel anchored: the output is the softmax mix of the valid candidates plus r",
+TEST_CASE("UavLocModel anchored: the output is the softmax mix of the valid candidates",
           "[pipeline]") {
   InitTorch(1, 32);
   UavLocModel model(AnchoredConfig(8));
@@ -207,56 +218,66 @@ TEST_CASE("UavLocModel anchored: the output is the softmax mix of the valid cand
   anchors.valid[0][1].fill_(0.0f);  // one with none
   const torch::Tensor out = model(latents, mask, &anchors);
   const torch::Tensor head = HeadOutput(model, latents, mask, anchors).to(torch::kFloat64);
-  REQUIRE(head.sizes() == torch::IntArrayRef({b, k, 3 + c + 1 + 3}));
-  double worst = 0.0;
-  for (int64_t s = 0; s < b; ++s)
-    for (int64_t w = 0; w < k; ++w) {
-      // p = (sum_i e^{l_i} (c_i + r) + e^{l_free} a) / (e^{l_free} + sum_i
-      // e^{l_i}), i over the valid candidates; r = head[0:3], a the free
-      // candidate's position at head[3 + c + 1:].
-      const double free_weight = std::exp(head[s][w][3 + c].item<double>());
-      double total = free_weight;
-      Eigen::Vector3d mix = Eigen::Vector3d::Zero();
-      for (int j = 0; j < 3; ++j) mix[j] = free_weight * head[s][w][3 + c + 1 + j].item<double>();
-      for (int64_t i = 0; i < c; ++i) {
-        if (anchors.valid[s][w][i].item<float>() < 0.5f) continue;
-        const double e = std::exp(head[s][w][3 + i].item<double>());
-        total += e;
-        for (int j = 0; j < 3; ++j)
-          mix[j] +=
-              e * (anchors.candidates[s][w][i][j].item<double>() + head[s][w][j].item<double>());
-      }
-      for (int j = 0; j < 3; ++j) {
-        const double expected = mix[j] / total;
-        worst = std::max(worst, std::abs(out[s][w][j].item<double>() - expected));
-      }
-    }
-  CHECK(worst < 1e-5);
-
-  // The log-weights it reports: log(e^{l_i} / total) for the valid and the
-  // free candidate, -inf for the invalid ones.
+  const int64_t h = UavLocModelImpl::kHypotheses;
+  REQUIRE(h == c + 2);
+  REQUIRE(head.sizes() == torch::IntArrayRef({b, k, h + 4}));
+  // w = softmax of l = head[0:c + 2] over the valid candidates, the ray's
+  // point f = o + softplus(head[c + 5]) d (where a ray is held) and the
+  // absolute a = head[c + 2:c + 5] (always); p = sum_i w_i c_i + w_f f +
+  // w_a a. Log-weights: -inf for what is not allowed.
   torch::Tensor log_w;
   model->forward(latents, mask, &anchors, &log_w);
-  REQUIRE(log_w.sizes() == torch::IntArrayRef({b, k, c + 1}));
-  double worst_log = 0.0;
+  REQUIRE(log_w.sizes() == torch::IntArrayRef({b, k, h}));
+  double worst = 0.0, worst_log = 0.0;
+  int with_ray = 0;
   for (int64_t s = 0; s < b; ++s)
     for (int64_t w = 0; w < k; ++w) {
+      const bool ray = anchors.ray[s][w][0].item<float>() > 0.5f;
+      with_ray += ray ? 1 : 0;
+      const double t = std::log1p(std::exp(head[s][w][c + 5].item<double>()));
+      std::vector<Eigen::Vector3d> position(static_cast<std::size_t>(h));
+      std::vector<bool> allowed(static_cast<std::size_t>(h), true);
+      for (int64_t i = 0; i < c; ++i) {
+        allowed[static_cast<std::size_t>(i)] = anchors.valid[s][w][i].item<float>() > 0.5f;
+        for (int j = 0; j < 3; ++j)
+          position[static_cast<std::size_t>(i)][j] = anchors.candidates[s][w][i][j].item<double>();
+      }
+      allowed[static_cast<std::size_t>(c)] = ray;
+      for (int j = 0; j < 3; ++j) {
+        position[static_cast<std::size_t>(c)][j] =
+            anchors.ray[s][w][1 + j].item<double>() + t * anchors.ray[s][w][4 + j].item<double>();
+        position[static_cast<std::size_t>(c + 1)][j] = head[s][w][c + 2 + j].item<double>();
+      }
       double total = 0.0;
-      for (int64_t i = 0; i <= c; ++i)
-        if (i == c || anchors.valid[s][w][i].item<float>() > 0.5f)
-          total += std::exp(head[s][w][3 + i].item<double>());
-      for (int64_t i = 0; i <= c; ++i) {
+      for (int64_t i = 0; i < h; ++i)
+        if (allowed[static_cast<std::size_t>(i)]) total += std::exp(head[s][w][i].item<double>());
+      Eigen::Vector3d expected = Eigen::Vector3d::Zero();
+      for (int64_t i = 0; i < h; ++i) {
         const double got = log_w[s][w][i].item<double>();
-        if (i < c && anchors.valid[s][w][i].item<float>() < 0.5f) {
+        if (!allowed[static_cast<std::size_t>(i)]) {
           CHECK(std::isinf(got));
           CHECK(got < 0.0);
-        } else {
-          worst_log = std::max(
-              worst_log, std::abs(got - (head[s][w][3 + i].item<double>() - std::log(total))));
+          continue;
         }
+        const double weight = std::exp(head[s][w][i].item<double>()) / total;
+        worst_log = std::max(worst_log, std::abs(got - std::log(weight)));
+        expected += weight * position[static_cast<std::size_t>(i)];
       }
+      for (int j = 0; j < 3; ++j)
+        worst = std::max(worst, std::abs(out[s][w][j].item<double>() - expected[j]));
     }
+  REQUIRE(with_ray >= 1);
+  REQUIRE(with_ray < b * k);
+  CHECK(worst < 1e-5);
   CHECK(worst_log < 1e-5);
+
+  // The hypotheses those weights weigh: the candidates, the ray's point, a.
+  torch::Tensor hypotheses;
+  model->forward(latents, mask, &anchors, nullptr, &hypotheses);
+  REQUIRE(hypotheses.sizes() == torch::IntArrayRef({b, k, h, 3}));
+  CHECK(torch::equal(hypotheses.narrow(2, 0, c), anchors.candidates));
+  CHECK(torch::allclose(hypotheses.select(2, c + 1).to(torch::kFloat64), head.narrow(-1, c + 2, 3),
+                        0.0, 1e-6));
 }
 
 TEST_CASE("UavLocModel anchored: invalid candidates have no influence, valid ones do",
@@ -313,13 +334,14 @@ TEST_CASE("UavLocModel anchored: no valid candidate leaves the free position, ne
   AnchorBatch none = RandomAnchors(b, k, 0.0);
   none.features.zero_();  // what the tracker gives before anything is seen
   none.features.slice(2, 4 * kAnchorCandidates, 4 * kAnchorCandidates + 6).fill_(1.0f);
+  none.ray.zero_();  // no ray held either
   REQUIRE(none.valid.sum().item<double>() == 0.0);
   {
     torch::NoGradGuard no_grad;
     const torch::Tensor out = model(latents, mask, &none);
     REQUIRE(AllFinite(out));
     CHECK(torch::equal(
-        out, HeadOutput(model, latents, mask, none).narrow(-1, 3 + kAnchorCandidates + 1, 3)));
+        out, HeadOutput(model, latents, mask, none).narrow(-1, kAnchorCandidates + 2, 3)));
     AnchorBatch far = Clone(none);
     far.candidates.fill_(1e6f);
     CHECK(torch::equal(model(latents, mask, &far), out));
@@ -545,7 +567,7 @@ TEST_CASE("UavLocModel anchored: save and load round trip keeps anchored", "[pip
   loaded->eval();
   CHECK(loaded->config().anchored);
   CHECK(loaded->regressor->head->weight.sizes() ==
-        torch::IntArrayRef({3 + kAnchorCandidates + 1 + 3, 32}));
+        torch::IntArrayRef({UavLocModelImpl::kHypotheses + 4, 32}));
   const auto a = model->named_parameters();
   const auto b = loaded->named_parameters();
   REQUIRE(a.size() == b.size());
@@ -579,6 +601,18 @@ TEST_CASE("UavLocModel anchored: save and load round trip keeps anchored", "[pip
   // The weights of a plain model do not fit an anchored sidecar.
   testing::WriteFile(SidecarPath(plain_path), testing::ReadFile(SidecarPath(path)));
   CHECK_THROWS_WITH(LoadUavLocModel(plain_path), Catch::Contains(plain_path));
+
+  // An anchored model of the first anchored head (no "anchor_features": 41
+  // features, a residual) is refused with what to do, naming the sidecar.
+  std::string old = testing::ReadFile(SidecarPath(path));
+  const std::string key = "\"anchor_features\": " + std::to_string(kAnchorFeatures) + ",";
+  const std::size_t key_at = old.find(key);
+  REQUIRE(key_at != std::string::npos);
+  old.erase(key_at, key.size());
+  testing::WriteFile(SidecarPath(path), old);
+  CHECK_THROWS_WITH(LoadUavLocModel(path), Catch::Contains(SidecarPath(path)) &&
+                                               Catch::Contains("41 anchor features") &&
+                                               Catch::Contains("uavsim train"));
 }
 
 TEST_CASE("UavLocModel: the same seed gives the same model and outputs", "[pipeline]") {
