@@ -143,7 +143,7 @@ AnchorWindow AnchorTracker::Update(std::int64_t k,
              static_cast<float>(r.direction_w.y()),
              static_cast<float>(r.direction_w.z())};
   }
-  const auto carried = [&](const Held& h) {
+  const auto carried = [&](const Held& h, double max_carry_s) {
     CarriedPoint c{h.anchor.origin_w, h.anchor.range_m, false};
     if (!h.window || !h.previous) return c;
     const double dt = h.anchor.t_s - h.previous->t_s;
@@ -152,7 +152,7 @@ AnchorWindow AnchorTracker::Update(std::int64_t k,
     c.moving = dt >= kMinFixGap_s && dt <= kMaxFixGap_s && v.norm() <= kMaxSpeed_mps &&
                std::abs(range_rate) <= kMaxSpeed_mps;
     if (c.moving) {
-      const double age = std::clamp(t_end - h.anchor.t_s, 0.0, kMaxCarry_s);
+      const double age = std::clamp(t_end - h.anchor.t_s, 0.0, max_carry_s);
       c.p += v * age;
       c.range_m += range_rate * age;
     }
@@ -162,11 +162,11 @@ AnchorWindow AnchorTracker::Update(std::int64_t k,
   // camera's ray on (or at the range of) the held ray.
   std::array<bool, 2> moving{}, gated_moving{};
   for (const auto& [j, h] : {std::pair{0, &lidar}, std::pair{1, &radar}}) {
-    const CarriedPoint c = carried(*h);
+    const CarriedPoint c = carried(*h, kMaxCarry_s);
     moving[static_cast<std::size_t>(j)] = c.moving;
     candidate(j, usable(*h), c.p);
     const Held& g = gated_[static_cast<std::size_t>(j)];
-    const CarriedPoint cg = carried(g);
+    const CarriedPoint cg = carried(g, kMaxCarryOnRay_s);
     gated_moving[static_cast<std::size_t>(j)] = cg.moving;
     const bool valid = usable(g) && ray;
     candidate(2 + j, valid, ProjectOntoRay(cg.p, r.origin_w, r.direction_w));

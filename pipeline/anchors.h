@@ -17,7 +17,8 @@
 // radar point carried forward to the window's end at the velocity of their
 // last two fixes (a point held for a second is 6 m behind a drone flying
 // 6 m/s; as last seen when the fixes give no plausible velocity; for at most
-// kMaxCarry_s; none older than kMaxAge_s), each of
+// kMaxCarry_s, kMaxCarryOnRay_s for the ray's candidates; none older than
+// kMaxAge_s), each of
 // them moved onto the held camera ray (its nearest point there), and the
 // point of the camera ray at each one's range from its own sensor, carried
 // forward at its range rate (the camera's bearing with the ranging sensor's
@@ -108,8 +109,10 @@ class AnchorTracker {
   static constexpr double kMinFixGap_s = 0.05;
   static constexpr double kMaxFixGap_s = 2.0;
   static constexpr double kMaxSpeed_mps = 20.0;  // also bounds the range rate
-  // A point is carried forward for at most this long, then held.
+  // A point is carried forward for at most this long, then held; a gated
+  // fix, which the candidates then put on the (fresher) ray, for longer.
   static constexpr double kMaxCarry_s = 1.0;
+  static constexpr double kMaxCarryOnRay_s = 3.0;
   // The gate of the candidates on the camera's ray (see above).
   static constexpr double kGateMaxAge_s = 0.5;
   static constexpr double kLidarGate_m = 1.5;

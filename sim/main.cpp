@@ -126,7 +126,7 @@ const char* kTrainHelp =
     "and training_report.json (losses and held-out RMSE); use it with\n"
     "--set /pipeline/model=MODEL or \"pipeline\": {\"model\": \"MODEL\"}.\n"
     "\n"
-    "  --quick        a small model in under 3 minutes (12 dry episodes of 10 s)\n"
+    "  --quick        a small model in under 3 minutes (17 dry episodes of 10 s)\n"
     "  --episodes N   trajectories to simulate (default 40, at least 3)\n"
     "  --episode-s S  simulated seconds each (default 20)\n"
     "  --seed N       seeds the episodes, the split and the weights (default 1)\n"

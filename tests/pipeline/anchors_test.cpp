@@ -364,10 +364,20 @@ TEST_CASE("AnchorTracker: points carried forward at the velocity of their last t
   for (int i : {1, 3, 5}) CheckCandidate(w3, i, false);  // no radar
   // Window 4, nothing new: 1 + 2.5 * 0.3 = 1.75 m east.
   CheckCandidate(tracker.Update(4, {}), 0, true, {0.175, 0.0, 3.0});
-  // Window 10 (end 2 s): carried for at most 1 s, 1 + 2.5 = 3.5 m east.
-  CheckCandidate(tracker.Update(10, {}), 0, true, {0.35, 0.0, 3.0});
-  // Window 27 (end 5.4 s): 4.9 s old, still held; window 28: 5.1 s, gone.
-  CheckCandidate(tracker.Update(27, {}), 0, true, {0.35, 0.0, 3.0});
+  // Window 10 (end 2 s): the point carried for at most 1 s, 1 + 2.5 = 3.5 m
+  // east; the ray's candidates for up to 3 s: the range 1.5 s on.
+  const double range_rate = (std::sqrt(901.0) - 30.0) / 0.4;
+  const AnchorWindow w10 = tracker.Update(10, {});
+  CheckCandidate(w10, 0, true, {0.35, 0.0, 3.0});
+  CheckCandidate(w10, 4, true, {0.0, 0.0, (std::sqrt(901.0) + 1.5 * range_rate) / 10.0});
+  // Window 20 (end 4 s): the range 3 s on at most.
+  CheckCandidate(tracker.Update(20, {}), 4, true,
+                 {0.0, 0.0, (std::sqrt(901.0) + 3.0 * range_rate) / 10.0});
+  // Window 27 (end 5.4 s): the point 4.9 s old, still held; the ray 5.25 s,
+  // no more candidates on it. Window 28: the point 5.1 s old, gone.
+  const AnchorWindow w27 = tracker.Update(27, {});
+  CheckCandidate(w27, 0, true, {0.35, 0.0, 3.0});
+  CheckCandidate(w27, 4, false);
   CheckCandidate(tracker.Update(28, {}), 0, false);
 
   // Implausible speeds and fixes too far apart in time carry nothing: the
