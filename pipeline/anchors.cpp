@@ -181,7 +181,7 @@ AnchorWindow AnchorTracker::Update(std::int64_t k,
   }
   // Capture to the end of window k, the time the estimate is for.
   const auto age = [&](const Held& h) {
-    return h.window ? std::max(0.0, static_cast<double>(k) * window_s_ - h.anchor.t_s) : kMaxAge_s;
+    return h.window ? std::max(0.0, t_end - h.anchor.t_s) : kMaxAge_s;
   };
   for (double unit : {kMaxAge_s, kFineAge_s})
     for (const Held& h : held_)

@@ -80,6 +80,20 @@ void CheckFeatures(const AnchorWindow& w, std::size_t offset, const std::vector<
   }
 }
 
+// A tracker holding nothing: no candidate, saturated ages, nothing fresh.
+void CheckNothingHeld(const AnchorWindow& w) {
+  for (int i = 0; i < kAnchorCandidates; ++i) CheckCandidate(w, i, false);
+  CheckFeatures(w, 0, std::vector<double>(24, 0.0));
+  CheckFeatures(w, kAgeOffset,
+                {1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0});
+  CheckFeatures(w, kGatedAgeOffset, {1.0, 1.0, 1.0, 1.0, 0.0, 0.0});
+}
+
+// The held ray the tracker hands the head: valid, origin, direction.
+void CheckRay(const AnchorWindow& w, const std::array<float, 7>& expected) {
+  for (std::size_t i = 0; i < 7; ++i) CHECK(w.ray[i] == Approx(expected[i]).margin(1e-7));
+}
+
 LatentFrame Frame(double t_s, const GeometricAnchor& anchor) {
   LatentFrame f;
   f.t_s = t_s;
@@ -198,14 +212,7 @@ TEST_CASE("AnchorTracker: candidates and features window by window", "[pipeline]
   const Eigen::Vector3d centre(1.0, 2.0, 3.0);
   AnchorTracker tracker(0.2, centre, 10.0);
 
-  SECTION("nothing seen yet") {
-    const AnchorWindow w = tracker.Update(1, {});
-    for (int i = 0; i < kAnchorCandidates; ++i) CheckCandidate(w, i, false);
-    CheckFeatures(w, 0, std::vector<double>(24, 0.0));
-    CheckFeatures(w, kAgeOffset,
-                  {1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0});
-    CheckFeatures(w, kGatedAgeOffset, {1.0, 1.0, 1.0, 1.0, 0.0, 0.0});
-  }
+  SECTION("nothing seen yet") { CheckNothingHeld(tracker.Update(1, {})); }
 
   SECTION("a LiDAR point, then a camera ray and a radar point, then nothing") {
     // Window 1 [0, 0.2): only a LiDAR point, 10 m east of the centre, seen
@@ -269,9 +276,8 @@ TEST_CASE("AnchorTracker: candidates and features window by window", "[pipeline]
     CheckFeatures(w2, kDirectionOffset, {1.0, 0.0, 0.0});
     // The held ray for the head's free position: valid, origin (0 - c) / 10,
     // direction.
-    const std::array<float, 7> ray2 = {1.0f, -0.1f, -0.2f, -0.3f, 1.0f, 0.0f, 0.0f};
-    for (std::size_t i = 0; i < 7; ++i) CHECK(w2.ray[i] == Approx(ray2[i]).margin(1e-7));
-    for (float v : w1.ray) CHECK(v == 0.0f);
+    CheckRay(w2, {1.0f, -0.1f, -0.2f, -0.3f, 1.0f, 0.0f, 0.0f});
+    CheckRay(w1, {});
     // Gated: no LiDAR fix (saturated ages), the radar's 0.1 s old.
     CheckFeatures(w2, kGatedAgeOffset, {1.0, 0.1 / 5.0, 1.0, 0.1, 0.0, 0.0});
 
@@ -319,17 +325,11 @@ TEST_CASE("AnchorTracker: candidates and features window by window", "[pipeline]
     for (int i = 0; i < kAnchorCandidates; ++i) CheckCandidate(w31, i, false);
     CheckFeatures(w31, kAgeOffset, {2.1 / 5.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0});
     CheckFeatures(w31, kDirectionOffset, {0.0, 0.6, 0.8});
-    const std::array<float, 7> ray31 = {1.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.6f, 0.8f};
-    for (std::size_t i = 0; i < 7; ++i) CHECK(w31.ray[i] == Approx(ray31[i]).margin(1e-7));
+    CheckRay(w31, {1.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.6f, 0.8f});
 
     // Reset: nothing held any more.
     tracker.Reset();
-    const AnchorWindow r = tracker.Update(42, {});
-    for (int i = 0; i < kAnchorCandidates; ++i) CheckCandidate(r, i, false);
-    CheckFeatures(r, 0, std::vector<double>(24, 0.0));
-    CheckFeatures(r, kAgeOffset,
-                  {1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0});
-    CheckFeatures(r, kGatedAgeOffset, {1.0, 1.0, 1.0, 1.0, 0.0, 0.0});
+    CheckNothingHeld(tracker.Update(42, {}));
   }
 }
 

@@ -109,6 +109,15 @@ WindowInputs RandomAnchoredWindow(std::int64_t k, int z, double drop,
   return w;
 }
 
+// Twenty windows with nothing at all step to finite positions.
+void CheckEmptyStepsFinite(UavLocModel& model) {
+  WindowInputs empty;
+  for (std::int64_t k = 1; k <= 20; ++k) {
+    empty.window = k;
+    CHECK(model->Step(empty).allFinite());
+  }
+}
+
 // The head's raw output [B, K, C + 6] for the given inputs, the way an
 // anchored forward feeds the regressor: [t^f, anchor features].
 torch::Tensor HeadOutput(UavLocModel& model, const torch::Tensor& latents,
@@ -148,11 +157,7 @@ TEST_CASE("UavLocModel: all-missing windows give no NaN in outputs or gradients"
     if (p.value().grad().defined()) CHECK(AllFinite(p.value().grad()));
 
   model->ResetState();
-  WindowInputs empty;
-  for (std::int64_t k = 1; k <= 20; ++k) {
-    empty.window = k;
-    CHECK(model->Step(empty).allFinite());
-  }
+  CheckEmptyStepsFinite(model);
 }
 
 TEST_CASE("UavLocModel: the online Step equals the batch forward on aligned windows",
@@ -362,11 +367,7 @@ TEST_CASE("UavLocModel anchored: no valid candidate leaves the free position, ne
   }
 
   model->eval();
-  WindowInputs empty;
-  for (std::int64_t k_step = 1; k_step <= 20; ++k_step) {
-    empty.window = k_step;
-    CHECK(model->Step(empty).allFinite());
-  }
+  CheckEmptyStepsFinite(model);
 }
 
 TEST_CASE("UavLocModel anchored: the online Step equals the batch forward with tracked anchors",
