@@ -4,62 +4,10 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace uavsim::pipeline {
-
-GeometricAnchor AnchorOf(const CameraObservation& obs) {
-  GeometricAnchor a;
-  if (!obs.detected || !obs.bearing_left_w.allFinite() || obs.bearing_left_w.norm() < 1e-9)
-    return a;
-  a.kind = GeometricAnchor::Kind::kRay;
-  a.t_s = obs.t_s;
-  a.origin_w = obs.eye_left_w;
-  a.direction_w = obs.bearing_left_w.normalized();
-  return a;
-}
-
-GeometricAnchor AnchorOf(const PointObservation& obs) {
-  GeometricAnchor a;
-  const std::size_t n = obs.count();
-  if (n == 0 || obs.channels < 3) return a;
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  double range_sum = 0.0;
-  for (std::size_t i = 0; i < n; ++i) {
-    const float* p = obs.values.data() + i * static_cast<std::size_t>(obs.channels);
-    const Eigen::Vector3d q(p[0], p[1], p[2]);
-    sum += q;
-    range_sum += (q - obs.sensor_position_w).norm();
-  }
-  a.kind = GeometricAnchor::Kind::kPoint;
-  a.t_s = obs.t_s;
-  a.origin_w = sum / static_cast<double>(n);
-  a.sensor_w = obs.sensor_position_w;
-  a.range_m = range_sum / static_cast<double>(n);
-  return a;
-}
-
-std::uint32_t AnchorBytes(Modality m) { return m == Modality::kCamera ? 24 : 16; }
-
-Eigen::Vector3d ProjectOntoRay(const Eigen::Vector3d& p, const Eigen::Vector3d& o,
-                               const Eigen::Vector3d& d) {
-  return o + std::max(1.0, (p - o).dot(d)) * d;
-}
-
-Eigen::Vector3d RangeOnRay(const Eigen::Vector3d& sensor, double range, const Eigen::Vector3d& hint,
-                           const Eigen::Vector3d& o, const Eigen::Vector3d& d) {
-  // |o + t d - sensor|^2 = range^2: t^2 + 2 b t + c = 0.
-  const Eigen::Vector3d os = o - sensor;
-  const double b = os.dot(d);
-  const double c = os.squaredNorm() - range * range;
-  const double disc = b * b - c;
-  double t = -b;
-  if (disc >= 0.0) {
-    const double root = std::sqrt(disc);
-    const double t1 = -b - root, t2 = -b + root;
-    t = (o + t1 * d - hint).squaredNorm() <= (o + t2 * d - hint).squaredNorm() ? t1 : t2;
-  }
-  return o + std::max(1.0, t) * d;
-}
 
 AnchorTracker::AnchorTracker(double window_s, const Eigen::Vector3d& centre_m, double scale_m)
     : window_s_(window_s), centre_m_(centre_m), scale_m_(scale_m) {
@@ -67,7 +15,7 @@ AnchorTracker::AnchorTracker(double window_s, const Eigen::Vector3d& centre_m, d
     throw std::invalid_argument("AnchorTracker: window_s and scale_m must be finite and > 0");
 }
 
-void AnchorTracker::Reset() { held_ = {}, gated_ = {}; }
+void AnchorTracker::Reset() { held_ = {}, gated_ = {}, filter_.Reset(); }
 
 namespace {
 
@@ -82,18 +30,6 @@ struct CarriedPoint {
 
 }  // namespace
 
-bool AnchorTracker::Consistent(Modality m, const GeometricAnchor& point) const {
-  const Held& camera = held_[static_cast<int>(Modality::kCamera)];
-  if (!camera.window || std::abs(point.t_s - camera.anchor.t_s) > kGateMaxAge_s) return false;
-  const GeometricAnchor& r = camera.anchor;
-  if (m == Modality::kLidar)
-    return (point.origin_w - ProjectOntoRay(point.origin_w, r.origin_w, r.direction_w)).norm() <=
-           kLidarGate_m;
-  return (point.origin_w -
-          RangeOnRay(point.sensor_w, point.range_m, point.origin_w, r.origin_w, r.direction_w))
-             .norm() <= kRadarGate_m;
-}
-
 void AnchorTracker::Held::Take(std::int64_t k, const GeometricAnchor& a) {
   if (window) previous = anchor;
   window = k;
@@ -102,6 +38,29 @@ void AnchorTracker::Held::Take(std::int64_t k, const GeometricAnchor& a) {
 
 AnchorWindow AnchorTracker::Update(std::int64_t k,
                                    const std::array<GeometricAnchor, kModalityCount>& arrived) {
+  WindowAnchors all;
+  for (std::size_t m = 0; m < all.size(); ++m)
+    if (arrived[m].kind != GeometricAnchor::Kind::kNone) all[m].push_back(arrived[m]);
+  return Update(k, all);
+}
+
+AnchorWindow AnchorTracker::Update(std::int64_t k, const WindowAnchors& all) {
+  // The filter: every anchor in capture order (the camera first at a tie).
+  std::vector<std::pair<Modality, const GeometricAnchor*>> ordered;
+  for (std::size_t m = 0; m < all.size(); ++m)
+    for (const GeometricAnchor& a : all[m])
+      if (a.kind != GeometricAnchor::Kind::kNone)
+        ordered.emplace_back(static_cast<Modality>(m), &a);
+  std::stable_sort(ordered.begin(), ordered.end(),
+                   [](const auto& a, const auto& b) { return a.second->t_s < b.second->t_s; });
+  for (const auto& [m, a] : ordered) filter_.Observe(m, *a);
+  std::array<GeometricAnchor, kModalityCount> arrived;
+  for (std::size_t m = 0; m < all.size(); ++m)
+    for (const GeometricAnchor& a : all[m])
+      if (a.kind != GeometricAnchor::Kind::kNone &&
+          (arrived[m].kind == GeometricAnchor::Kind::kNone || a.t_s >= arrived[m].t_s))
+        arrived[m] = a;
+
   const double t_end = static_cast<double>(k) * window_s_;
   // The camera first: this window's ray gates this window's points.
   const auto camera_index = static_cast<std::size_t>(Modality::kCamera);
@@ -111,7 +70,9 @@ AnchorWindow AnchorTracker::Update(std::int64_t k,
     const GeometricAnchor& a = arrived[static_cast<std::size_t>(m)];
     if (a.kind == GeometricAnchor::Kind::kNone) continue;
     held_[static_cast<std::size_t>(m)].Take(k, a);
-    if (Consistent(m, a)) gated_[static_cast<std::size_t>(m) - 1].Take(k, a);
+    const Held& camera = held_[camera_index];
+    if (camera.window && AnchorAgreesWithRay(m, a, camera.anchor))
+      gated_[static_cast<std::size_t>(m) - 1].Take(k, a);
   }
 
   const Held& camera = held_[static_cast<int>(Modality::kCamera)];
@@ -173,7 +134,7 @@ AnchorWindow AnchorTracker::Update(std::int64_t k,
     candidate(4 + j, valid,
               RangeOnRay(g.anchor.sensor_w, cg.range_m, cg.p, r.origin_w, r.direction_w));
   }
-  for (int i = 0; i < kAnchorCandidates; ++i) {
+  for (int i = 0; i < kFilterCandidate; ++i) {
     w.features[static_cast<std::size_t>(f++)] = w.valid[static_cast<std::size_t>(i)];
     for (int c = 0; c < 3; ++c)
       w.features[static_cast<std::size_t>(f++)] =
@@ -206,6 +167,19 @@ AnchorWindow AnchorTracker::Update(std::int64_t k,
     for (const Held& h : gated_)
       w.features[static_cast<std::size_t>(f++)] = static_cast<float>(std::min(age(h) / unit, 1.0));
   for (bool m : gated_moving) w.features[static_cast<std::size_t>(f++)] = m ? 1.0f : 0.0f;
+  // The filter's track.
+  const std::optional<AnchorFilter::Estimate> track = filter_.PredictAt(t_end);
+  candidate(kFilterCandidate, track.has_value(),
+            track ? track->position_m : Eigen::Vector3d::Zero());
+  w.features[static_cast<std::size_t>(f++)] = track ? 1.0f : 0.0f;
+  for (int c = 0; c < 3; ++c)
+    w.features[static_cast<std::size_t>(f++)] =
+        static_cast<float>(w.candidates[static_cast<std::size_t>(kFilterCandidate)][c]);
+  w.features[static_cast<std::size_t>(f++)] =
+      track ? static_cast<float>(std::min(track->sigma_m / kSigmaUnit_m, 4.0)) : 4.0f;
+  for (double unit : {kMaxAge_s, kFineAge_s})
+    w.features[static_cast<std::size_t>(f++)] =
+        track ? static_cast<float>(std::min(track->ranging_age_s / unit, 1.0)) : 1.0f;
   if (f != kAnchorFeatures)
     throw std::logic_error("AnchorTracker: wrote " + std::to_string(f) + " features");
   return w;

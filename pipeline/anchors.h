@@ -31,51 +31,40 @@
 // returns, the radar's largest cluster a car), and on the training episodes
 // the gate cut the best candidate's RMSE from 8.4 m to 1.7 m (dry) and from
 // 16 m to 4.4 m (rain, fog). See NOTES.md 2026-11-22 (5).
+// A seventh candidate is the track of a constant-acceleration AnchorFilter
+// (pipeline/anchor_filter.h) fed every anchor of every window: the fixes
+// filtered together instead of one carried forward (NOTES.md 2026-11-22 (6)).
 #pragma once
 
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
 #include <optional>
+#include <vector>
 
-#include "pipeline/observations.h"
+#include "pipeline/anchor_filter.h"
+#include "pipeline/geometric_anchor.h"
 
 namespace uavsim::pipeline {
 
-struct GeometricAnchor {
-  enum class Kind : std::uint8_t { kNone, kPoint, kRay };
-  Kind kind = Kind::kNone;
-  Eigen::Vector3d origin_w = Eigen::Vector3d::Zero();      // the point, or the ray's origin
-  Eigen::Vector3d direction_w = Eigen::Vector3d::UnitX();  // unit; rays only
-  // Points only: the sensor's position and the mean range of the points from it.
-  Eigen::Vector3d sensor_w = Eigen::Vector3d::Zero();
-  double range_m = 0.0;
-  double t_s = 0.0;  // capture time of the observation
-};
-
-// The camera's ray (kNone when nothing was detected).
-GeometricAnchor AnchorOf(const CameraObservation& obs);
-// The centroid of the points and their mean range (kNone for an empty cloud).
-GeometricAnchor AnchorOf(const PointObservation& obs);
-
-// Bytes an anchor adds to a node's message (float32 values): 16 for a point
-// (centroid and mean range; the sensor's position is configuration), 24 for
-// a ray (origin and direction; its time is the message's capture stamp).
-std::uint32_t AnchorBytes(Modality m);
-
 // Candidates: 0 LiDAR point, 1 radar point, 2 and 3 those projected onto the
-// camera ray, 4 and 5 the camera ray at the LiDAR's and the radar's range.
-inline constexpr int kAnchorCandidates = 6;
-// Per window: each candidate's validity and normalised position (24); the
+// camera ray, 4 and 5 the camera ray at the LiDAR's and the radar's range, 6
+// the AnchorFilter's track.
+inline constexpr int kAnchorCandidates = 7;
+inline constexpr int kFilterCandidate = 6;
+// Per window: candidates 0-5's validity and normalised position (24); the
 // age of each modality's held anchor at the window's end (capture to
 // deadline), in units of kMaxAge_s and of kFineAge_s, both saturating at 1
 // (6); whether it arrived in this window (3); whether the LiDAR and the radar
 // point are carried forward (2); the held LiDAR and radar points' distances
 // from the camera ray (2); their distance from each other (1); the camera
 // ray's direction (3); the gated LiDAR and radar fixes' ages, coarse and
-// fine (4), and whether they are carried forward (2). Modalities in Modality
-// order.
-inline constexpr int kAnchorFeatures = 47;
+// fine (4), and whether they are carried forward (2); the filter's track:
+// validity and normalised position (4), its position's standard deviation
+// in kSigmaUnit_m (saturating at 4) and the age of its last ranging update,
+// coarse and fine (3). Modalities in Modality order.
+inline constexpr int kAnchorFeatures = 54;
+inline constexpr int kFilterFeatureOffset = 47;
 
 // What the network sees of the anchors in one window. Candidates are in
 // normalised coordinates (p - centre) / scale like the network's output.
@@ -95,8 +84,11 @@ class AnchorTracker {
   // not finite and > 0.
   AnchorTracker(double window_s, const Eigen::Vector3d& centre_m, double scale_m);
 
-  // Window k's anchors (index: Modality; kNone for a modality with nothing in
-  // the window). Windows must increase; skipped ones count as empty.
+  // Window k's anchors, every one that arrived stamped in the window: the
+  // filter takes them all in capture order, the held anchors each
+  // modality's latest. Windows must increase; skipped ones count as empty.
+  AnchorWindow Update(std::int64_t k, const WindowAnchors& arrived);
+  // The same with at most one anchor per modality (kNone: nothing).
   AnchorWindow Update(std::int64_t k, const std::array<GeometricAnchor, kModalityCount>& arrived);
   void Reset();
 
@@ -104,6 +96,7 @@ class AnchorTracker {
   static constexpr double kMaxAge_s = 5.0;
   static constexpr double kFineAge_s = 1.0;
   static constexpr double kRayDistanceUnit_m = 5.0;
+  static constexpr double kSigmaUnit_m = 1.0;
   // Two fixes give a velocity when they are this far apart in time and the
   // speed is plausible; else the point is held as last seen.
   static constexpr double kMinFixGap_s = 0.05;
@@ -114,9 +107,9 @@ class AnchorTracker {
   static constexpr double kMaxCarry_s = 1.0;
   static constexpr double kMaxCarryOnRay_s = 3.0;
   // The gate of the candidates on the camera's ray (see above).
-  static constexpr double kGateMaxAge_s = 0.5;
-  static constexpr double kLidarGate_m = 1.5;
-  static constexpr double kRadarGate_m = 4.0;
+  static constexpr double kGateMaxAge_s = RayGate::kGateMaxAge_s;
+  static constexpr double kLidarGate_m = RayGate::kLidarGate_m;
+  static constexpr double kRadarGate_m = RayGate::kRadarGate_m;
 
  private:
   struct Held {
@@ -125,24 +118,13 @@ class AnchorTracker {
     std::optional<GeometricAnchor> previous;  // the update before
     void Take(std::int64_t k, const GeometricAnchor& a);
   };
-  // Whether a LiDAR or radar point agrees with the held camera ray.
-  bool Consistent(Modality m, const GeometricAnchor& point) const;
 
   double window_s_;
   Eigen::Vector3d centre_m_;
   double scale_m_;
   std::array<Held, kModalityCount> held_;
   std::array<Held, 2> gated_;  // LiDAR, radar: the fixes that passed the gate
+  AnchorFilter filter_{AnchorFilter::Motion::kCa};
 };
-
-// The point of the ray (origin o, unit direction d) nearest to p, at least
-// 1 m in front of the origin.
-Eigen::Vector3d ProjectOntoRay(const Eigen::Vector3d& p, const Eigen::Vector3d& o,
-                               const Eigen::Vector3d& d);
-// The point of the ray (o, d) at distance `range` from `sensor`: of the two
-// crossings of the sphere the one nearer to `hint`; the ray's point nearest
-// to the sensor when it misses the sphere; at least 1 m in front of o.
-Eigen::Vector3d RangeOnRay(const Eigen::Vector3d& sensor, double range, const Eigen::Vector3d& hint,
-                           const Eigen::Vector3d& o, const Eigen::Vector3d& d);
 
 }  // namespace uavsim::pipeline

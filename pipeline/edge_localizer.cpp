@@ -10,6 +10,8 @@ struct EdgeLocalizer::Impl {
   explicit Impl(UavLocModel m) : model(std::move(m)) {}
   UavLocModel model;
   bool has_seen_data = false;
+  bool wait_for_track = false;
+  bool has_seen_track = false;
   std::optional<std::int64_t> last_window;
 };
 
@@ -41,19 +43,25 @@ std::optional<Eigen::Vector3d> EdgeLocalizer::OnWindow(const WindowInputs& windo
   // has then seen nothing again.
   if (impl_->last_window &&
       window.window - *impl_->last_window > UavLocModelImpl::kMaxGapWindows + 1)
-    impl_->has_seen_data = false;
+    impl_->has_seen_data = impl_->has_seen_track = false;
   impl_->last_window = window.window;
   const TeAlign& align = impl_->model->te_align();
   for (const auto& frames : window.frames)
     for (const LatentFrame& f : frames)
       if (align.WindowOf(f.t_s) == window.window) impl_->has_seen_data = true;
+  if (anchored() &&
+      impl_->model->last_anchors().valid[static_cast<std::size_t>(kFilterCandidate)] > 0.5f)
+    impl_->has_seen_track = true;
   if (!impl_->has_seen_data || !p.allFinite()) return std::nullopt;
+  if (impl_->wait_for_track && anchored() && !impl_->has_seen_track) return std::nullopt;
   return p;
 }
 
+void EdgeLocalizer::WaitForTrack(bool wait) { impl_->wait_for_track = wait; }
+
 void EdgeLocalizer::Reset() {
   impl_->model->ResetState();
-  impl_->has_seen_data = false;
+  impl_->has_seen_data = impl_->has_seen_track = false;
   impl_->last_window.reset();
 }
 

@@ -40,9 +40,17 @@ class EdgeLocalizer {
   // no measurement at all). Throws std::invalid_argument for k not after
   // the previous window, a latent whose size is not latent_dim(), or a
   // non-finite latent value.
+  // With WaitForTrack(true) an anchored model answers only from the first
+  // window in which its anchor filter holds a track (pipeline/
+  // anchor_filter.h: a LiDAR fix that agreed with the camera's ray, or two
+  // radar fixes that did and agreed with each other; before that its range
+  // is a guess, metres off), as the EKF answers only once a track is
+  // confirmed.
   std::optional<Eigen::Vector3d> OnWindow(const WindowInputs& window);
+  void WaitForTrack(bool wait);
 
-  // Forgets the track: the next window starts from a zero state.
+  // Forgets the track (and any fix seen): the next window starts from a
+  // zero state.
   void Reset();
 
   int latent_dim() const;  // z the model expects from every node

@@ -24,6 +24,7 @@ void Visit(V& v, PipelineConfig& c) {
           "expected one of 4, 8, 16, 32, 64 (paper Sec. VI), got " + std::to_string(c.latent_dim));
   v("late_allowance_s", c.late_allowance_s, Rule::NonNegative(10.0));
   v("methods", c.methods, KnownMethods());
+  v("uavloc_wait_for_track", c.uavloc_wait_for_track);
   v.Object("preprocess", c.preprocess);
   v.Object("ekf", c.ekf);
 }

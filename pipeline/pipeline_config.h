@@ -19,6 +19,12 @@ struct PipelineConfig {
   // uavloc_camera / _lidar / _radar: the same trained network fed only that
   // modality's latents (the paper's single-modality comparison).
   std::vector<std::string> methods{"uavloc", "ekf"};
+  // uavloc (anchored model) answers from its first window with a track of
+  // its anchor filter (pipeline/edge_localizer.h), as ekf from its first
+  // confirmed track; false: from its first window with any data (before a
+  // track its range is a guess, metres off). The single-modality ablations
+  // always answer from their first data.
+  bool uavloc_wait_for_track = true;
   PreprocessConfig preprocess;  // the sensing nodes' pre-processing (paper Sec. IV-A)
   EkfConfig ekf;                // the classical baseline
 };

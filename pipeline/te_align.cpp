@@ -1,5 +1,6 @@
 #include "pipeline/te_align.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -113,15 +114,16 @@ AlignedWindow TeAlign::Align(const WindowInputs& window) const {
   return out;
 }
 
-std::array<GeometricAnchor, kModalityCount> TeAlign::LatestAnchors(
-    const WindowInputs& window) const {
-  std::array<GeometricAnchor, kModalityCount> out;
-  for (int m = 0; m < kModalityCount; ++m) {
-    double latest = -std::numeric_limits<double>::infinity();
-    for (const LatentFrame& frame : window.frames[static_cast<std::size_t>(m)])
-      if (frame.anchor.kind != GeometricAnchor::Kind::kNone && frame.t_s >= latest &&
-          WindowOf(frame.t_s) == window.window)
-        latest = frame.t_s, out[static_cast<std::size_t>(m)] = frame.anchor;
+WindowAnchors TeAlign::AnchorsOf(const WindowInputs& window) const {
+  WindowAnchors out;
+  for (std::size_t m = 0; m < out.size(); ++m) {
+    std::vector<const LatentFrame*> frames;
+    for (const LatentFrame& frame : window.frames[m])
+      if (frame.anchor.kind != GeometricAnchor::Kind::kNone && WindowOf(frame.t_s) == window.window)
+        frames.push_back(&frame);
+    std::stable_sort(frames.begin(), frames.end(),
+                     [](const LatentFrame* a, const LatentFrame* b) { return a->t_s < b->t_s; });
+    for (const LatentFrame* frame : frames) out[m].push_back(frame->anchor);
   }
   return out;
 }

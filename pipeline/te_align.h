@@ -9,7 +9,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "pipeline/anchors.h"
+#include "pipeline/geometric_anchor.h"
 #include "pipeline/observations.h"
 
 namespace uavsim::pipeline {
@@ -79,9 +79,9 @@ class TeAlign {
   // are ignored and counted. Throws std::invalid_argument if a latent's size
   // is not z or it holds a non-finite value.
   AlignedWindow Align(const WindowInputs& window) const;
-  // Per modality the anchor of the latest frame stamped in the window (kNone
-  // when there is none).
-  std::array<GeometricAnchor, kModalityCount> LatestAnchors(const WindowInputs& window) const;
+  // Per modality the anchors of the frames stamped in the window, in capture
+  // order.
+  WindowAnchors AnchorsOf(const WindowInputs& window) const;
 
   const TeAlignConfig& config() const { return config_; }
 

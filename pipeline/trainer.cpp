@@ -259,8 +259,8 @@ struct WindowSequence {
   torch::Tensor latents;  // [K, M, z]
   torch::Tensor mask;     // [K, M]
   torch::Tensor truth;    // [K, 3]
-  // Per window, each modality's latest anchor (pipeline/anchors.h).
-  std::vector<std::array<GeometricAnchor, kModalityCount>> anchors;
+  // Per window, each modality's anchors (pipeline/anchors.h).
+  std::vector<WindowAnchors> anchors;
 };
 
 // mu of every sample, in the episodes' order.
@@ -312,7 +312,7 @@ WindowSequence AlignEpisode(const Episode& ep, const std::vector<std::vector<flo
   WindowSequence seq;
   for (const WindowInputs& w : inputs) {
     one[0].push_back(align.Align(w));
-    seq.anchors.push_back(align.LatestAnchors(w));
+    seq.anchors.push_back(align.AnchorsOf(w));
   }
   const FusionBatch b = StackWindows(one);
   seq.latents = b.latents[0];
@@ -345,10 +345,9 @@ std::vector<AnchorWindow> TrackAnchors(const WindowSequence& s, std::int64_t sta
   const auto acc = m.accessor<float, 2>();
   std::vector<AnchorWindow> out;
   for (std::int64_t i = 0; i < m.size(0); ++i) {
-    std::array<GeometricAnchor, kModalityCount> arrived =
-        s.anchors[static_cast<std::size_t>(start + i)];
+    WindowAnchors arrived = s.anchors[static_cast<std::size_t>(start + i)];
     for (int j = 0; j < kModalityCount; ++j)
-      if (acc[i][j] < 0.5f) arrived[static_cast<std::size_t>(j)] = {};
+      if (acc[i][j] < 0.5f) arrived[static_cast<std::size_t>(j)].clear();
     out.push_back(tracker.Update(i + 1, arrived));
   }
   return out;
@@ -364,15 +363,19 @@ torch::Tensor ForwardSequence(UavLocModel& model, const WindowSequence& s,
 
 // Cross-entropy of the anchored head's weights log_w [B, K, H] over its
 // hypotheses h [B, K, H, 3] against the valid candidate nearest the truth
-// [B, K, 3] if within `radius` (normalised), else the nearer of the two
-// free hypotheses; mean over the estimated windows.
+// [B, K, 3] (the filter's track preferred by `preference`, normalised) if
+// within `radius` (normalised), else the nearer of the two free hypotheses;
+// mean over the estimated windows.
 torch::Tensor SelectionLoss(const torch::Tensor& log_w, const torch::Tensor& h,
-                            const torch::Tensor& truth, const torch::Tensor& mask, double radius) {
+                            const torch::Tensor& truth, const torch::Tensor& mask, double radius,
+                            double preference) {
   const torch::Tensor d =
       (h.detach() - truth.unsqueeze(-2))
           .norm(2, -1)
           .masked_fill(~torch::isfinite(log_w.detach()), std::numeric_limits<float>::infinity());
-  const auto [nearest, index] = d.narrow(-1, 0, kAnchorCandidates).min(-1);
+  torch::Tensor bonus = torch::zeros({kAnchorCandidates});
+  bonus[kFilterCandidate] = preference;
+  const auto [nearest, index] = (d.narrow(-1, 0, kAnchorCandidates) - bonus).min(-1);
   const torch::Tensor free = d.narrow(-1, kAnchorCandidates, 2).argmin(-1) + kAnchorCandidates;
   const torch::Tensor target = torch::where(nearest < radius, index, free);
   const torch::Tensor w = EstimatedWindows(mask);
@@ -470,7 +473,8 @@ UavLocModel TrainFusion(const std::vector<WindowSequence>& train,
           if (config.anchored && o.selection_weight > 0.0)
             loss = loss + o.selection_weight *
                               SelectionLoss(log_w, hypotheses, b.truth, b.fusion.mask,
-                                            o.selection_radius_m / config.position_scale_m);
+                                            o.selection_radius_m / config.position_scale_m,
+                                            o.filter_preference_m / config.position_scale_m);
           loss.backward();
           adam.step();
         }
@@ -564,8 +568,10 @@ void TrainOptions::Validate() const {
   require(d_model >= 1 && layers >= 1, "d_model and layers", "must be >= 1");
   require(stage2_plateau_epochs >= 0, "stage2_plateau_epochs", "must be >= 0");
   require(selection_weight >= 0 && std::isfinite(selection_weight) && selection_radius_m > 0 &&
-              std::isfinite(selection_radius_m),
-          "selection_weight and selection_radius_m", "must be finite, >= 0 and > 0");
+              std::isfinite(selection_radius_m) && filter_preference_m >= 0 &&
+              std::isfinite(filter_preference_m),
+          "selection_weight, selection_radius_m and filter_preference_m",
+          "must be finite, >= 0, > 0 and >= 0");
 }
 
 TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& o, const ModelManifest& manifest,
@@ -653,7 +659,9 @@ std::string ReportJson(const TrainReport& r, const TrainOptions& o) {
   j["bottleneck"] = o.bottleneck == IbBottleneck::kIb ? "ib" : "mlp";
   j["head"] = o.anchored ? "anchored" : "paper";
   if (o.anchored) {
-    j["selection_loss"] = {{"weight", o.selection_weight}, {"radius_m", o.selection_radius_m}};
+    j["selection_loss"] = {{"weight", o.selection_weight},
+                           {"radius_m", o.selection_radius_m},
+                           {"filter_preference_m", o.filter_preference_m}};
     j["position_loss"] = o.mixture_loss ? "mixture" : "mean";
   }
   j["stage2_plateau_epochs"] = o.stage2_plateau_epochs;

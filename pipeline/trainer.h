@@ -79,6 +79,12 @@ struct TrainOptions {
   // the weights spread, NOTES.md). 0: position loss only.
   double selection_weight = 1.0;
   double selection_radius_m = 2.0;
+  // The filter's track (pipeline/anchor_filter.h) is the target whenever it
+  // is at most this much farther from the truth than the nearest candidate:
+  // which single fix happens to be nearest in a window is luck the features
+  // cannot tell, the filtered track is right on average (NOTES.md
+  // 2026-11-22 (6)). 0: the nearest.
+  double filter_preference_m = 0.2;
   // Anchored head: the position loss. true: the expected squared error of
   // the weighted hypotheses, sum_h w_h |c_h - y|^2 (a mixture: weight on a
   // far candidate costs its whole error, so the weights concentrate on the

@@ -170,6 +170,7 @@ void UavLocModelImpl::ResetState() {
   state_ = regressor->InitialState(1);
   last_window_.reset();
   tracker_.Reset();
+  last_anchors_ = {};
 }
 
 torch::Tensor UavLocModelImpl::StepAligned(const AlignedWindow& window,
@@ -206,14 +207,14 @@ Eigen::Vector3d UavLocModelImpl::Step(const WindowInputs& window) {
       for (auto& t : empty.latent) t.assign(static_cast<std::size_t>(config_.latent_dim), 0.0f);
       for (std::int64_t g = 0; g < gap; ++g) {
         empty.window = *last_window_ + 1 + g;
-        StepAligned(empty, tracker_.Update(empty.window, {}));
+        StepAligned(empty, tracker_.Update(empty.window, WindowAnchors{}));
       }
     }
   }
   if (last_window_ && window.window - *last_window_ - 1 > kMaxGapWindows) tracker_.Reset();
   last_window_ = window.window;
-  const AnchorWindow anchors = tracker_.Update(window.window, te_align_.LatestAnchors(window));
-  const torch::Tensor p = PositionInMetres(StepAligned(aligned, anchors)).to(torch::kFloat64);
+  last_anchors_ = tracker_.Update(window.window, te_align_.AnchorsOf(window));
+  const torch::Tensor p = PositionInMetres(StepAligned(aligned, last_anchors_)).to(torch::kFloat64);
   const double* d = p.data_ptr<double>();
   return {d[0], d[1], d[2]};
 }

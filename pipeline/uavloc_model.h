@@ -67,8 +67,8 @@ struct UavLocModelConfig {
   // were 0.1 m off; see NOTES.md 2026-11-22 (5).)
   bool anchored = false;
   // The anchor features the model was trained with: must be this build's
-  // kAnchorFeatures (41 for the first anchored head, with the residual:
-  // such models need training again).
+  // kAnchorFeatures (41 for the first anchored head, with the residual; 47
+  // before the filter's track: such models need training again).
   int anchor_features = kAnchorFeatures;
   // Output normalisation: the head predicts (p - centre) / scale, p in
   // world ENU metres.
@@ -127,6 +127,8 @@ class UavLocModelImpl : public torch::nn::Module {
 
   const UavLocModelConfig& config() const { return config_; }
   const TeAlign& te_align() const { return te_align_; }
+  // Anchored models: the anchors the last Step used (default before any).
+  const AnchorWindow& last_anchors() const { return last_anchors_; }
 
   Madw madw{nullptr};
   Mica mica{nullptr};
@@ -144,6 +146,7 @@ class UavLocModelImpl : public torch::nn::Module {
   UavLocModelConfig config_;
   TeAlign te_align_;
   AnchorTracker tracker_;
+  AnchorWindow last_anchors_;
   MambaRegressorState state_;
   std::optional<std::int64_t> last_window_;
 };

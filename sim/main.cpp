@@ -112,9 +112,9 @@ const char* kSweepHelp =
 const char* kTrainHelp =
     "usage: uavsim train SCENARIO.json [--out MODEL] [--quick] [--seed N] [--episodes N]\n"
     "                    [--episode-s S] [--lr RATE] [--bottleneck ib|mlp] [--head H]\n"
-    "                    [--selection-weight W] [--plateau N] [--position-loss L]\n"
-    "                    [--threads N] [--data FILE] [--label-gate M,DEG] [--set /ptr=value]\n"
-    "                    [--force] [--quiet]\n"
+    "                    [--selection-weight W] [--filter-preference M] [--plateau N]\n"
+    "                    [--position-loss L] [--threads N] [--data FILE] [--label-gate M,DEG]\n"
+    "                    [--set /ptr=value] [--force] [--quiet]\n"
     "\n"
     "Generates training data by simulation and trains the UAVLoc model with LibTorch on\n"
     "the CPU. Each episode is the scenario with its own target trajectory (orbit,\n"
@@ -137,6 +137,9 @@ const char* kTrainHelp =
     "                 anchors; see NOTES.md) or paper (its linear head)\n"
     "  --selection-weight W  anchored head: weight of the candidate-selection loss\n"
     "                 (default 1; 0: position MSE only)\n"
+    "  --filter-preference M  anchored head: the selection target is the filter's track\n"
+    "                 when it is at most M metres farther from the truth than the nearest\n"
+    "                 candidate (default 0.2; 0: the nearest)\n"
     "  --plateau N    halve the stage-2 learning rate after N epochs without a better\n"
     "                 validation loss (default 6; 0: never)\n"
     "  --position-loss L  anchored head: mixture (default: the weighted candidates' expected\n"
@@ -323,11 +326,12 @@ double NumberOption(const std::string& cmd, const std::string& name, const std::
 }
 
 int Train(int argc, char** argv) {
-  const ParsedArgs a = Parse("train", argc, argv, 2,
-                             {"--out", "--seed", "--episodes", "--episode-s", "--threads", "--set",
-                              "--data", "--lr", "--bottleneck", "--label-gate", "--head",
-                              "--selection-weight", "--plateau", "--position-loss"},
-                             {"--quick", "--quiet", "--force", "--help"});
+  const ParsedArgs a =
+      Parse("train", argc, argv, 2,
+            {"--out", "--seed", "--episodes", "--episode-s", "--threads", "--set", "--data", "--lr",
+             "--bottleneck", "--label-gate", "--head", "--selection-weight", "--filter-preference",
+             "--plateau", "--position-loss"},
+            {"--quick", "--quiet", "--force", "--help"});
   if (a.Has("--help")) return std::cout << kTrainHelp, kExitOk;
   const std::string& file = OneScenario("train", a);
   uavsim::sim::TrainCommand c;
@@ -351,6 +355,9 @@ int Train(int argc, char** argv) {
   if (auto v = a.Value("--selection-weight"))
     c.selection_weight =
         NumberOption("train", "--selection-weight", *v, 0.0, 100.0, "a number in [0, 100]");
+  if (auto v = a.Value("--filter-preference"))
+    c.filter_preference_m =
+        NumberOption("train", "--filter-preference", *v, 0.0, 100.0, "metres in [0, 100]");
   if (auto v = a.Value("--plateau"))
     c.plateau_epochs = static_cast<int>(UnsignedOption("train", "--plateau", *v, 10000));
   if (auto v = a.Value("--position-loss")) {

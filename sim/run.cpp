@@ -246,6 +246,7 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
   if (any_uavloc && !o.collect) {
     pipeline::InitTorch(1, s.seed);
     uavloc = LoadModel(s, o.scenario_file, o.quiet, model_info);
+    uavloc->edge().WaitForTrack(s.pipeline.uavloc_wait_for_track);
     for (const char* m : kModalities)
       if (const std::string method = std::string("uavloc_") + m; runs(method.c_str()))
         ablations[method] = {*channel::ModalityFromName(m), uavloc->LoadEdge()};

@@ -48,15 +48,16 @@ struct TrainCommand {
   bool quick = false;
   bool quiet = false;
   std::uint64_t seed = 1;
-  int episodes = 0;                // 0: the default for quick / full
-  double episode_s = 0.0;          // 0: the default for quick / full
-  double learning_rate = 0.0;      // 0: the trainer's default
-  bool mlp_bottleneck = false;     // the paper's MLP baseline instead of the IB head
-  bool paper_head = false;         // the paper's linear edge head instead of the anchored one
-  double selection_weight = -1.0;  // < 0: TrainOptions' default
-  int plateau_epochs = -1;         // < 0: TrainOptions' default
-  std::string position_loss;       // mixture or mean; empty: TrainOptions' default
-  double label_gate_m = 0.0;       // stage 1 label gate (pipeline/trainer.h); 0: off
+  int episodes = 0;                   // 0: the default for quick / full
+  double episode_s = 0.0;             // 0: the default for quick / full
+  double learning_rate = 0.0;         // 0: the trainer's default
+  bool mlp_bottleneck = false;        // the paper's MLP baseline instead of the IB head
+  bool paper_head = false;            // the paper's linear edge head instead of the anchored one
+  double selection_weight = -1.0;     // < 0: TrainOptions' default
+  double filter_preference_m = -1.0;  // < 0: TrainOptions' default
+  int plateau_epochs = -1;            // < 0: TrainOptions' default
+  std::string position_loss;          // mixture or mean; empty: TrainOptions' default
+  double label_gate_m = 0.0;          // stage 1 label gate (pipeline/trainer.h); 0: off
   double label_gate_deg = 0.0;
   int threads = 1;  // LibTorch intra-op threads (see NOTES.md: 1 is fastest here)
   // Episode file: read if it exists (no simulation), else written after

@@ -1,8 +1,8 @@
 // Geometric anchors (pipeline/anchors.h): a node's anchor against its closed
 // form (centroid, ray), the projection onto a ray, the edge's tracker of held
 // anchors window by window (candidates, the gate against the camera's ray and
-// the 47 features worked out by hand), and TE-Align's pick of a window's
-// latest anchor.
+// the 54 features worked out by hand), and TE-Align's list of a window's
+// anchors.
 #include "pipeline/anchors.h"
 
 #include <array>
@@ -65,12 +65,13 @@ void CheckCandidate(const AnchorWindow& w, int i, bool valid,
                     const Eigen::Vector3d& expected = Eigen::Vector3d::Zero()) {
   INFO("candidate " << i);
   const auto u = static_cast<std::size_t>(i);
+  const std::size_t offset = i == kFilterCandidate ? kFilterFeatureOffset : 4 * u;
   CHECK(w.valid[u] == (valid ? 1.0f : 0.0f));
-  CHECK(w.features[4 * u] == (valid ? 1.0f : 0.0f));
+  CHECK(w.features[offset] == (valid ? 1.0f : 0.0f));
   if (!valid) return;
   CheckVector(w.candidates[u], expected);
   for (int c = 0; c < 3; ++c)
-    CHECK(w.features[4 * u + 1 + static_cast<std::size_t>(c)] == Approx(expected[c]).margin(1e-6));
+    CHECK(w.features[offset + 1 + static_cast<std::size_t>(c)] == Approx(expected[c]).margin(1e-6));
 }
 
 void CheckFeatures(const AnchorWindow& w, std::size_t offset, const std::vector<double>& expected) {
@@ -87,6 +88,7 @@ void CheckNothingHeld(const AnchorWindow& w) {
   CheckFeatures(w, kAgeOffset,
                 {1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0});
   CheckFeatures(w, kGatedAgeOffset, {1.0, 1.0, 1.0, 1.0, 0.0, 0.0});
+  CheckFeatures(w, kFilterFeatureOffset, {0.0, 0.0, 0.0, 0.0, 4.0, 1.0, 1.0});
 }
 
 // The held ray the tracker hands the head: valid, origin, direction.
@@ -126,6 +128,9 @@ TEST_CASE("AnchorOf: a point cloud's anchor is the mean of its points", "[pipeli
   const GeometricAnchor r = AnchorOf(radar);
   CHECK(r.kind == Kind::kPoint);
   CheckVector(r.origin_w, {3.0, 3.0, 3.0}, 1e-6);  // (12, 12, 12) / 4
+  CHECK(r.has_range_rate);
+  CHECK(r.range_rate_mps == Approx(0.5));  // (-3 + 4 + 1 + 0) / 4
+  CHECK_FALSE(l.has_range_rate);           // LiDAR: 4 channels
 
   PointObservation one;
   one.channels = 5;
@@ -166,11 +171,11 @@ TEST_CASE("AnchorOf: a camera's anchor is the left eye's ray, none when undetect
   CHECK(AnchorOf(cam).kind == Kind::kNone);
 }
 
-TEST_CASE("AnchorBytes: 24 bytes for the camera's ray, 16 for a point and its range",
+TEST_CASE("AnchorBytes: 24 bytes for the camera's ray, 16 for a point and its range, 20 radar",
           "[pipeline]") {
   CHECK(AnchorBytes(Modality::kCamera) == 24);
   CHECK(AnchorBytes(Modality::kLidar) == 16);
-  CHECK(AnchorBytes(Modality::kRadar) == 16);
+  CHECK(AnchorBytes(Modality::kRadar) == 20);  // and its radial velocity
 }
 
 TEST_CASE("ProjectOntoRay: the foot of the perpendicular, at least 1 m ahead", "[pipeline]") {
@@ -212,7 +217,7 @@ TEST_CASE("AnchorTracker: candidates and features window by window", "[pipeline]
   const Eigen::Vector3d centre(1.0, 2.0, 3.0);
   AnchorTracker tracker(0.2, centre, 10.0);
 
-  SECTION("nothing seen yet") { CheckNothingHeld(tracker.Update(1, {})); }
+  SECTION("nothing seen yet") { CheckNothingHeld(tracker.Update(1, WindowAnchors{})); }
 
   SECTION("a LiDAR point, then a camera ray and a radar point, then nothing") {
     // Window 1 [0, 0.2): only a LiDAR point, 10 m east of the centre, seen
@@ -229,7 +234,8 @@ TEST_CASE("AnchorTracker: candidates and features window by window", "[pipeline]
     for (int i = 1; i < kAnchorCandidates; ++i) {
       CheckCandidate(w1, i, false);
       CHECK(w1.candidates[static_cast<std::size_t>(i)] == Eigen::Vector3d::Zero());
-      CHECK(w1.features[4 * static_cast<std::size_t>(i) + 1] == 0.0f);
+      const std::size_t x = i == kFilterCandidate ? kFilterFeatureOffset + 1 : 4 * i + 1;
+      CHECK(w1.features[x] == 0.0f);
     }
     // Ages camera, LiDAR, radar at the window's end (0.2 s), / 5 s then
     // / 1 s; fresh; ray distances; |L - R|; ray direction.
@@ -282,7 +288,7 @@ TEST_CASE("AnchorTracker: candidates and features window by window", "[pipeline]
     CheckFeatures(w2, kGatedAgeOffset, {1.0, 0.1 / 5.0, 1.0, 0.1, 0.0, 0.0});
 
     // Window 3: nothing arrives, everything is held and 0.2 s older.
-    const AnchorWindow w3 = tracker.Update(3, {});
+    const AnchorWindow w3 = tracker.Update(3, WindowAnchors{});
     for (int i = 0; i < 6; ++i) {
       const auto u = static_cast<std::size_t>(i);
       CHECK(w3.valid[u] == w2.valid[u]);
@@ -296,7 +302,7 @@ TEST_CASE("AnchorTracker: candidates and features window by window", "[pipeline]
 
     // Window 20 (end 4.0 s): camera 3.65 s old, LiDAR 3.9, radar 3.7; the
     // fine ages saturate.
-    const AnchorWindow w20 = tracker.Update(20, {});
+    const AnchorWindow w20 = tracker.Update(20, WindowAnchors{});
     CheckFeatures(w20, kAgeOffset, {3.65 / 5.0, 3.9 / 5.0, 3.7 / 5.0, 1.0, 1.0, 1.0});
 
     // Window 21 (end 4.2 s): a new camera ray at 4.1 s replaces the old one:
@@ -321,7 +327,7 @@ TEST_CASE("AnchorTracker: candidates and features window by window", "[pipeline]
 
     // Window 31 (end 6.2 s): the LiDAR and radar points are more than 5 s
     // old and give no candidates; the ray (2.1 s) alone gives none either.
-    const AnchorWindow w31 = tracker.Update(31, {});
+    const AnchorWindow w31 = tracker.Update(31, WindowAnchors{});
     for (int i = 0; i < kAnchorCandidates; ++i) CheckCandidate(w31, i, false);
     CheckFeatures(w31, kAgeOffset, {2.1 / 5.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0});
     CheckFeatures(w31, kDirectionOffset, {0.0, 0.6, 0.8});
@@ -329,7 +335,7 @@ TEST_CASE("AnchorTracker: candidates and features window by window", "[pipeline]
 
     // Reset: nothing held any more.
     tracker.Reset();
-    CheckNothingHeld(tracker.Update(42, {}));
+    CheckNothingHeld(tracker.Update(42, WindowAnchors{}));
   }
 }
 
@@ -363,22 +369,22 @@ TEST_CASE("AnchorTracker: points carried forward at the velocity of their last t
   CheckCandidate(w3, 4, true, {0.0, 0.0, range / 10.0});
   for (int i : {1, 3, 5}) CheckCandidate(w3, i, false);  // no radar
   // Window 4, nothing new: 1 + 2.5 * 0.3 = 1.75 m east.
-  CheckCandidate(tracker.Update(4, {}), 0, true, {0.175, 0.0, 3.0});
+  CheckCandidate(tracker.Update(4, WindowAnchors{}), 0, true, {0.175, 0.0, 3.0});
   // Window 10 (end 2 s): the point carried for at most 1 s, 1 + 2.5 = 3.5 m
   // east; the ray's candidates for up to 3 s: the range 1.5 s on.
   const double range_rate = (std::sqrt(901.0) - 30.0) / 0.4;
-  const AnchorWindow w10 = tracker.Update(10, {});
+  const AnchorWindow w10 = tracker.Update(10, WindowAnchors{});
   CheckCandidate(w10, 0, true, {0.35, 0.0, 3.0});
   CheckCandidate(w10, 4, true, {0.0, 0.0, (std::sqrt(901.0) + 1.5 * range_rate) / 10.0});
   // Window 20 (end 4 s): the range 3 s on at most.
-  CheckCandidate(tracker.Update(20, {}), 4, true,
+  CheckCandidate(tracker.Update(20, WindowAnchors{}), 4, true,
                  {0.0, 0.0, (std::sqrt(901.0) + 3.0 * range_rate) / 10.0});
   // Window 27 (end 5.4 s): the point 4.9 s old, still held; the ray 5.25 s,
   // no more candidates on it. Window 28: the point 5.1 s old, gone.
-  const AnchorWindow w27 = tracker.Update(27, {});
+  const AnchorWindow w27 = tracker.Update(27, WindowAnchors{});
   CheckCandidate(w27, 0, true, {0.35, 0.0, 3.0});
   CheckCandidate(w27, 4, false);
-  CheckCandidate(tracker.Update(28, {}), 0, false);
+  CheckCandidate(tracker.Update(28, WindowAnchors{}), 0, false);
 
   // Implausible speeds and fixes too far apart in time carry nothing: the
   // point stays as last seen.
@@ -498,7 +504,66 @@ TEST_CASE("AnchorTracker: refuses a window length or scale that is not positive"
   CHECK_NOTHROW(AnchorTracker(0.2, c, 1.0));
 }
 
-TEST_CASE("TeAlign: LatestAnchors takes the latest anchored frame of the window", "[pipeline]") {
+TEST_CASE("AnchorTracker: the filter's track is the seventh candidate", "[pipeline]") {
+  const Eigen::Vector3d centre(1.0, 2.0, 3.0);
+  AnchorTracker tracker(0.2, centre, 10.0);
+  // Window 1 [0, 0.2): a ray along +x at 0.05 s, then a LiDAR centroid
+  // (20, 0.5, 0) at 0.1 s, 0.5 m from the ray (inside the 1.5 m gate): the
+  // track starts at its projection (20, 0, 0), at rest, at 0.1 s; a second
+  // ray at 0.15 s through (20, 0, 0) leaves it there.
+  WindowAnchors arrived;
+  arrived[kCamera] = {Ray({0.0, 0.0, 0.0}, {1.0, 0.0, 0.0}, 0.05),
+                      Ray({0.0, 0.0, 0.0}, {1.0, 0.0, 0.0}, 0.15)};
+  arrived[kLidar] = {Point(20.0, 0.5, 0.0, 0.1)};
+  const AnchorWindow w1 = tracker.Update(1, arrived);
+  CheckCandidate(w1, kFilterCandidate, true, (Eigen::Vector3d(20.0, 0.0, 0.0) - centre) / 10.0);
+  // The tracker's filter is the constant-acceleration one. The position's
+  // standard deviation at the deadline 0.2 s, per axis with [p, v, a]
+  // covariances P0 = diag(sL^2, sV^2, sA^2) from the start at 0.1 s: x has
+  // no ray information (predicted 0.1 s); y and z are predicted 0.05 s,
+  // updated by the ray at 0.15 s (noise (20 sigma_theta)^2 + floor^2, no
+  // innovation), predicted 0.05 s.
+  const double j = AnchorFilter::kJerkPsd;
+  const auto f = [](double dt) {
+    Eigen::Matrix3d m;
+    m << 1.0, dt, dt * dt / 2.0, 0.0, 1.0, dt, 0.0, 0.0, 1.0;
+    return m;
+  };
+  const auto q = [j](double dt) {
+    Eigen::Matrix3d m;
+    m << std::pow(dt, 5) / 20.0, std::pow(dt, 4) / 8.0, std::pow(dt, 3) / 6.0,
+        std::pow(dt, 4) / 8.0, std::pow(dt, 3) / 3.0, dt * dt / 2.0, std::pow(dt, 3) / 6.0,
+        dt * dt / 2.0, dt;
+    return Eigen::Matrix3d(j * m);
+  };
+  const Eigen::Matrix3d p0 = Eigen::Vector3d(std::pow(AnchorFilter::kLidarSigma_m, 2),
+                                             std::pow(AnchorFilter::kStartSpeedSigma_mps, 2),
+                                             std::pow(AnchorFilter::kStartAccelSigma_mps2, 2))
+                                 .asDiagonal();
+  const Eigen::Matrix3d px = f(0.1) * p0 * f(0.1).transpose() + q(0.1);
+  Eigen::Matrix3d py = f(0.05) * p0 * f(0.05).transpose() + q(0.05);
+  const double r2 = std::pow(20.0 * AnchorFilter::kRaySigma_rad, 2) +
+                    AnchorFilter::kRayFloor_m * AnchorFilter::kRayFloor_m;
+  const Eigen::Vector3d gain = py.col(0) / (py(0, 0) + r2);
+  py -= gain * py.row(0);  // (I - K H) P
+  py = f(0.05) * py * f(0.05).transpose() + q(0.05);
+  CheckFeatures(
+      w1, kFilterFeatureOffset + 4,
+      {std::sqrt(px(0, 0) + 2.0 * py(0, 0)) / AnchorTracker::kSigmaUnit_m, 0.1 / 5.0, 0.1});
+  // Nothing more arrives: the track coasts, then ends kMaxPredict_s after
+  // its LiDAR fix.
+  const auto coast_windows = static_cast<std::int64_t>(AnchorFilter::kMaxPredict_s / 0.2);
+  CheckCandidate(tracker.Update(coast_windows, WindowAnchors{}), kFilterCandidate, true,
+                 (Eigen::Vector3d(20.0, 0.0, 0.0) - centre) / 10.0);
+  const AnchorWindow ended = tracker.Update(coast_windows + 1, WindowAnchors{});
+  CheckCandidate(ended, kFilterCandidate, false);
+  CheckFeatures(ended, kFilterFeatureOffset, {0.0, 0.0, 0.0, 0.0, 4.0, 1.0, 1.0});
+  // Reset forgets the track.
+  tracker.Reset();
+  CheckCandidate(tracker.Update(1, WindowAnchors{}), kFilterCandidate, false);
+}
+
+TEST_CASE("TeAlign: AnchorsOf takes the window's anchored frames in capture order", "[pipeline]") {
   TeAlignConfig config;
   config.latent_dim = 4;
   const TeAlign align(config);
@@ -520,21 +585,22 @@ TEST_CASE("TeAlign: LatestAnchors takes the latest anchored frame of the window"
   radar.push_back(Frame(0.50, GeometricAnchor{}));
   radar.push_back(Frame(0.70, Point(5.0, 5.0, 5.0)));  // later window
 
-  const auto latest = align.LatestAnchors(in);
-  REQUIRE(latest[kCamera].kind == Kind::kRay);
-  CheckVector(latest[kCamera].origin_w, o);
-  CheckVector(latest[kCamera].direction_w, {0.0, 1.0, 0.0});
-  REQUIRE(latest[kLidar].kind == Kind::kPoint);
-  CheckVector(latest[kLidar].origin_w, {1.0, 1.0, 1.0});
-  CHECK(latest[kRadar].kind == Kind::kNone);
+  const WindowAnchors got = align.AnchorsOf(in);
+  REQUIRE(got[kCamera].size() == 2);
+  CheckVector(got[kCamera][0].direction_w, {0.0, 0.0, 1.0});  // 0.41
+  CheckVector(got[kCamera][1].direction_w, {0.0, 1.0, 0.0});  // 0.55
+  REQUIRE(got[kLidar].size() == 2);
+  CheckVector(got[kLidar][0].origin_w, {2.0, 2.0, 2.0});  // 0.40
+  CheckVector(got[kLidar][1].origin_w, {1.0, 1.0, 1.0});  // 0.45
+  CHECK(got[kRadar].empty());
 
-  // The latest frame wins whatever the order of arrival.
+  // Capture order whatever the order of arrival.
   std::swap(lidar[0], lidar[1]);
-  CheckVector(align.LatestAnchors(in)[kLidar].origin_w, {1.0, 1.0, 1.0});
+  CheckVector(align.AnchorsOf(in)[kLidar][0].origin_w, {2.0, 2.0, 2.0});
   // An empty window has no anchors.
   WindowInputs empty;
   empty.window = 3;
-  for (const GeometricAnchor& a : align.LatestAnchors(empty)) CHECK(a.kind == Kind::kNone);
+  for (const auto& anchors : align.AnchorsOf(empty)) CHECK(anchors.empty());
 }
 
 }  // namespace uavsim::pipeline

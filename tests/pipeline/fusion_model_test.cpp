@@ -294,7 +294,8 @@ TEST_CASE("UavLocModel anchored: invalid candidates have no influence, valid one
   const torch::Tensor latents = torch::randn({b, k, 3, 8});
   const torch::Tensor mask = torch::bernoulli(torch::full({b, k, 3}, 0.7));
   AnchorBatch zeros = RandomAnchors(b, k, 0.5);
-  zeros.valid[1][4].copy_(torch::tensor({1.0f, 0.0f, 1.0f, 0.0f, 1.0f, 0.0f}));  // both kinds below
+  zeros.valid[1][4].copy_(
+      torch::tensor({1.0f, 0.0f, 1.0f, 0.0f, 1.0f, 0.0f, 1.0f}));  // both kinds below
   AnchorBatch huge = Clone(zeros);
   const torch::Tensor invalid = (zeros.valid < 0.5).unsqueeze(-1).expand_as(zeros.candidates);
   zeros.candidates.masked_fill_(invalid, 0.0f);
@@ -398,7 +399,7 @@ TEST_CASE("UavLocModel anchored: the online Step equals the batch forward with t
     if (skipped(k)) w = WindowInputs{k, {}};
     inputs.push_back(w);
     aligned.push_back(model->te_align().Align(w));
-    anchors.push_back(tracker.Update(k, model->te_align().LatestAnchors(w)));
+    anchors.push_back(tracker.Update(k, model->te_align().AnchorsOf(w)));
     with_ray += anchors.back().valid[2] > 0.5f ? 1 : 0;
     online.push_back(skipped(k) ? std::nullopt : std::optional(model->Step(w)));
   }
@@ -426,8 +427,8 @@ TEST_CASE("UavLocModel anchored: the online Step equals the batch forward with t
   std::vector<AnchorWindow> unheld;
   for (std::int64_t k = 1; k <= windows; ++k) {
     AnchorTracker forgetful(config.window_s, config.position_centre_m, config.position_scale_m);
-    unheld.push_back(forgetful.Update(
-        k, model->te_align().LatestAnchors(inputs[static_cast<std::size_t>(k - 1)])));
+    unheld.push_back(
+        forgetful.Update(k, model->te_align().AnchorsOf(inputs[static_cast<std::size_t>(k - 1)])));
   }
   const AnchorBatch unheld_batch = StackAnchors({unheld});
   CHECK(!torch::allclose(model(batch.latents, batch.mask, &unheld_batch),
@@ -659,6 +660,58 @@ TEST_CASE("EdgeLocalizer: loads a model and localizes window by window", "[pipel
   WindowInputs bad = RandomWindow(5, 8, 0.0, gen);
   bad.frames[0][0].latent.resize(3);
   CHECK_THROWS_WITH(localizer->OnWindow(bad), Catch::Contains("expected z = 8"));
+}
+
+TEST_CASE("EdgeLocalizer: waiting for a track, an anchored model answers from its first track",
+          "[pipeline]") {
+  InitTorch(1, 29);
+  const auto waits = EdgeLocalizer::Create(8, 0.2, true);
+  const auto answers = EdgeLocalizer::Create(8, 0.2, true);
+  waits->WaitForTrack(true);
+  // Windows 1-3: a camera ray along +x from the origin and a radar point 30
+  // m off the ray (no track: it does not agree with the ray, and a radar
+  // never starts one alone); window 4: a LiDAR point 0.3 m from the ray at
+  // 20 m, which starts the anchor filter's track.
+  torch::Generator gen = torch::make_generator<torch::CPUGeneratorImpl>(9);
+  const auto frame = [&](double t, const GeometricAnchor& a) {
+    LatentFrame f;
+    f.t_s = t;
+    f.latent.resize(8);
+    for (float& x : f.latent) x = static_cast<float>(torch::randn({1}, gen).item<double>());
+    f.anchor = a;
+    f.anchor.t_s = t;
+    return f;
+  };
+  GeometricAnchor ray;
+  ray.kind = GeometricAnchor::Kind::kRay;
+  ray.direction_w = Eigen::Vector3d::UnitX();
+  GeometricAnchor far;
+  far.kind = GeometricAnchor::Kind::kPoint;
+  far.origin_w = {20.0, 30.0, 0.0};
+  far.range_m = far.origin_w.norm();
+  GeometricAnchor near = far;
+  near.origin_w = {20.0, 0.3, 0.0};
+  near.range_m = near.origin_w.norm();
+  for (std::int64_t k = 1; k <= 4; ++k) {
+    WindowInputs w;
+    w.window = k;
+    const double t = 0.2 * static_cast<double>(k) - 0.15;
+    w.frames[static_cast<std::size_t>(Modality::kCamera)].push_back(frame(t, ray));
+    w.frames[static_cast<std::size_t>(Modality::kRadar)].push_back(frame(t + 0.01, far));
+    if (k == 4)
+      w.frames[static_cast<std::size_t>(Modality::kLidar)].push_back(frame(t + 0.02, near));
+    INFO("window " << k);
+    CHECK(answers->OnWindow(w).has_value());
+    CHECK(waits->OnWindow(w).has_value() == (k == 4));
+  }
+  // The track once seen, the model answers on (the state carries it).
+  WindowInputs empty;
+  empty.window = 5;
+  CHECK(waits->OnWindow(empty).has_value());
+  // Reset forgets it.
+  waits->Reset();
+  empty.window = 1;
+  CHECK_FALSE(waits->OnWindow(empty).has_value());
 }
 
 }  // namespace uavsim::pipeline

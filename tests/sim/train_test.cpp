@@ -154,6 +154,7 @@ TEST_CASE("CLI: train and run refuse what they cannot use, naming it", "[sim][tr
   for (const std::vector<std::string>& bad : {std::vector<std::string>{"--head", "linear"},
                                               {"--selection-weight", "-1"},
                                               {"--selection-weight", "x"},
+                                              {"--filter-preference", "-0.1"},
                                               {"--plateau", "-2"},
                                               {"--position-loss", "l1"}}) {
     std::vector<std::string> args{"train", kDefault, "--out", dir + "/m"};
