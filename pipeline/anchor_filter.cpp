@@ -12,64 +12,262 @@ namespace {
 
 // chi-square quantiles at 0.99 for 1 to 4 degrees of freedom.
 constexpr double kGate[] = {0.0, 6.635, 9.210, 11.345, 13.277};
+constexpr double kPi = 3.14159265358979323846;
+
+}  // namespace
+
+AnchorFilter::AnchorFilter(Motion motion) : motion_(motion) {
+  switch (motion) {
+    case Motion::kCv:
+      modes_ = {Mode{Model::kCv}};
+      break;
+    case Motion::kCa:
+      modes_ = {Mode{Model::kCa}};
+      break;
+    case Motion::kImm:
+      modes_ = {Mode{Model::kCt, 0.5}, Mode{Model::kCv, 0.5}};
+      break;
+  }
+}
+
+namespace {
+
+using Vector10d = Eigen::Matrix<double, 10, 1>;
+using Matrix10d = Eigen::Matrix<double, 10, 10>;
+
+// The per-axis [p, v, a] blocks (f, q) spread over the 10-state (omega
+// kept, without noise).
+void PerAxis(const Eigen::Matrix3d& f, const Eigen::Matrix3d& q, Matrix10d& big_f,
+             Matrix10d& big_q) {
+  big_f.setIdentity();
+  big_q.setZero();
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) {
+      big_f.block<3, 3>(3 * r, 3 * c) = f(r, c) * Eigen::Matrix3d::Identity();
+      big_q.block<3, 3>(3 * r, 3 * c) = q(r, c) * Eigen::Matrix3d::Identity();
+    }
+}
+
+// White acceleration of spectral density q on [p, v] per axis.
+Eigen::Matrix3d WhiteAcceleration(double q, double dt) {
+  Eigen::Matrix3d m;
+  m << q * dt * dt * dt / 3.0, q * dt * dt / 2.0, 0.0,  //
+      q * dt * dt / 2.0, q * dt, 0.0,                   //
+      0.0, 0.0, 0.0;
+  return m;
+}
+
+}  // namespace
+
+// Bar-Shalom et al. Eq. 11.7.1-4 and its derivatives; their series in
+// omega dt below kSeries (where the closed forms lose digits to
+// cancellation).
+void CoordinatedTurn(const Eigen::Matrix<double, 10, 1>& x, double dt,
+                     Eigen::Matrix<double, 10, 1>& next, Eigen::Matrix<double, 10, 10>& jacobian) {
+  constexpr double kSeries = 1e-2;
+  const double vx = x(3), vy = x(4), w = x(9);
+  const double wt = w * dt, s = std::sin(wt), c = std::cos(wt);
+  double a, b, da, db;  // p_xy += [a -b; b a] v_xy; da, db their d/domega
+  if (std::abs(wt) < kSeries) {
+    const double x2 = wt * wt;
+    a = dt * (1.0 - x2 / 6.0), b = dt * wt * (0.5 - x2 / 24.0);
+    da = dt * dt * wt * (-1.0 / 3.0 + x2 / 30.0), db = dt * dt * (0.5 - x2 / 8.0);
+  } else {
+    const double half = std::sin(wt / 2.0);
+    a = s / w, b = 2.0 * half * half / w;  // (1 - cos) / w
+    da = (dt * c - a) / w, db = (dt * s - b) / w;
+  }
+  next = x;
+  next(0) = x(0) + a * vx - b * vy;
+  next(1) = x(1) + b * vx + a * vy;
+  next(2) = x(2) + dt * x(5);
+  next(3) = c * vx - s * vy;
+  next(4) = s * vx + c * vy;
+  next.segment<3>(6).setZero();
+  jacobian.setIdentity();
+  jacobian(0, 3) = a, jacobian(0, 4) = -b, jacobian(0, 9) = da * vx - db * vy;
+  jacobian(1, 3) = b, jacobian(1, 4) = a, jacobian(1, 9) = db * vx + da * vy;
+  jacobian(2, 5) = dt;
+  jacobian(3, 3) = c, jacobian(3, 4) = -s, jacobian(3, 9) = -dt * (s * vx + c * vy);
+  jacobian(4, 3) = s, jacobian(4, 4) = c, jacobian(4, 9) = dt * (c * vx - s * vy);
+  for (int i = 6; i < 9; ++i) jacobian(i, i) = 0.0;
+}
+
+namespace {
+
+// A radar fix as a position: the centroid's direction u from the radar at
+// the mean range R, with noise sigma_R^2 u u^T + (R sigma_angle)^2 (I - u u^T)
+// (its angles are degrees off, its range centimetres).
+struct RadarFix {
+  Eigen::Vector3d position, u;
+  Eigen::Matrix3d noise;
+};
+RadarFix RadarFixOf(const GeometricAnchor& a) {
+  RadarFix f;
+  f.u = (a.origin_w - a.sensor_w).normalized();
+  f.position = a.sensor_w + a.range_m * f.u;
+  const Eigen::Matrix3d along = f.u * f.u.transpose();
+  const double cross = a.range_m * AnchorFilter::kRadarAngleSigma_rad;
+  f.noise = AnchorFilter::kRangeSigma_m * AnchorFilter::kRangeSigma_m * along +
+            cross * cross * (Eigen::Matrix3d::Identity() - along);
+  return f;
+}
 
 }  // namespace
 
 void AnchorFilter::PredictTo(double t_s) {
   const double dt = t_s - t_s_;
   if (dt <= 0.0) return;
-  // Per axis, in 3x3 blocks of [p, v, a].
-  Eigen::Matrix3d f = Eigen::Matrix3d::Identity(), q;
-  f(0, 1) = f(1, 2) = dt;
-  const double d2 = dt * dt, d3 = d2 * dt;
-  if (motion_ == Motion::kCv) {
-    q << kAccelPsd * d3 / 3.0, kAccelPsd * d2 / 2.0, 0.0,  //
-        kAccelPsd * d2 / 2.0, kAccelPsd * dt, 0.0,         //
-        0.0, 0.0, 0.0;
-  } else {
-    f(0, 2) = d2 / 2.0;
-    const double d4 = d3 * dt, d5 = d4 * dt, j = kJerkPsd;
-    q << j * d5 / 20.0, j * d4 / 8.0, j * d3 / 6.0,  //
-        j * d4 / 8.0, j * d3 / 3.0, j * d2 / 2.0,    //
-        j * d3 / 6.0, j * d2 / 2.0, j * dt;
-  }
-  Matrix9d big_f, big_q;
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) {
-      big_f.block<3, 3>(3 * r, 3 * c) = f(r, c) * Eigen::Matrix3d::Identity();
-      big_q.block<3, 3>(3 * r, 3 * c) = q(r, c) * Eigen::Matrix3d::Identity();
+  // IMM mixing (Bar-Shalom et al. Sec. 11.6.6, steps 1-2): the switch
+  // probability over dt of a Markov chain leaving a mode at 1/kModeSwitch_s.
+  const std::size_t n = modes_.size();
+  if (n > 1) {
+    const double leave = 1.0 - std::exp(-dt / kModeSwitch_s);
+    const auto pi = [&](std::size_t i, std::size_t j) {
+      return i == j ? 1.0 - leave : leave / static_cast<double>(n - 1);
+    };
+    std::vector<Mode> mixed = modes_;
+    for (std::size_t j = 0; j < n; ++j) {
+      double c = 0.0;
+      for (std::size_t i = 0; i < n; ++i) c += pi(i, j) * modes_[i].probability;
+      Vector10d x = Vector10d::Zero();
+      for (std::size_t i = 0; i < n; ++i) x += pi(i, j) * modes_[i].probability / c * modes_[i].x;
+      Matrix10d p = Matrix10d::Zero();
+      for (std::size_t i = 0; i < n; ++i) {
+        const Vector10d d = modes_[i].x - x;
+        p += pi(i, j) * modes_[i].probability / c * (modes_[i].p + d * d.transpose());
+      }
+      mixed[j].probability = c, mixed[j].x = x, mixed[j].p = p;
     }
-  x_ = big_f * x_;
-  p_ = big_f * p_ * big_f.transpose() + big_q;
+    modes_ = std::move(mixed);
+  }
+  for (Mode& mode : modes_) {
+    Matrix10d f, q;
+    Vector10d next;
+    if (mode.model == Model::kCt) {
+      CoordinatedTurn(mode.x, dt, next, f);
+      Matrix10d unused;
+      PerAxis(Eigen::Matrix3d::Identity(), WhiteAcceleration(kTurnAccelPsd, dt), unused, q);
+      q(9, 9) = kTurnRatePsd * dt;
+    } else {
+      Eigen::Matrix3d f3 = Eigen::Matrix3d::Identity(), q3;
+      f3(0, 1) = dt;
+      if (mode.model == Model::kCv) {
+        f3(2, 2) = 0.0;  // a stays 0
+        q3 = WhiteAcceleration(kAccelPsd, dt);
+      } else {
+        f3(1, 2) = dt, f3(0, 2) = dt * dt / 2.0;
+        const double d2 = dt * dt, d3 = d2 * dt, d4 = d3 * dt, d5 = d4 * dt, j = kJerkPsd;
+        q3 << j * d5 / 20.0, j * d4 / 8.0, j * d3 / 6.0,  //
+            j * d4 / 8.0, j * d3 / 3.0, j * d2 / 2.0,     //
+            j * d3 / 6.0, j * d2 / 2.0, j * dt;
+      }
+      PerAxis(f3, q3, f, q);
+      next = f * mode.x;
+    }
+    mode.x = next;
+    mode.p = f * mode.p * f.transpose() + q;
+  }
   t_s_ = t_s;
+  Combine();
 }
 
-template <int N>
-bool AnchorFilter::Update(const Eigen::Matrix<double, N, 1>& innovation,
-                          const Eigen::Matrix<double, N, 9>& jacobian,
-                          const Eigen::Matrix<double, N, N>& noise) {
-  const Eigen::Matrix<double, N, N> s = jacobian * p_ * jacobian.transpose() + noise;
-  const Eigen::LLT<Eigen::Matrix<double, N, N>> llt(s);
-  if (llt.info() != Eigen::Success) return false;
-  if (innovation.dot(llt.solve(innovation)) > kGate[N]) return false;
-  const Eigen::Matrix<double, 9, N> k = llt.solve(jacobian * p_).transpose();  // P H^T S^-1
-  x_ += k * innovation;
-  const Matrix9d a = Matrix9d::Identity() - k * jacobian;
-  p_ = a * p_ * a.transpose() + k * noise * k.transpose();  // Joseph form
+void AnchorFilter::Combine() {
+  x_.setZero();
+  for (const Mode& mode : modes_) x_ += mode.probability * mode.x;
+  p_.setZero();
+  for (const Mode& mode : modes_) {
+    const Vector10d d = mode.x - x_;
+    p_ += mode.probability * (mode.p + d * d.transpose());
+  }
+}
+
+template <int N, class Measure>
+bool AnchorFilter::Update(const Measure& measure, const Eigen::Matrix<double, N, N>& noise) {
+  using VectorN = Eigen::Matrix<double, N, 1>;
+  using MatrixN = Eigen::Matrix<double, N, N>;
+  {
+    const auto [innovation, h] = measure(x_);
+    const Eigen::LLT<MatrixN> llt(h * p_ * h.transpose() + noise);
+    if (llt.info() != Eigen::Success) return false;
+    if (innovation.dot(llt.solve(innovation)) > kGate[N]) return false;
+  }
+  // Each mode's Kalman update (Joseph form) and its log-likelihood (IMM
+  // step 4): -d^2/2 - log det(2 pi S)/2. Committed once every mode's is.
+  std::vector<Mode> updated = modes_;
+  std::vector<double> log_likelihood(modes_.size());
+  for (std::size_t j = 0; j < modes_.size(); ++j) {
+    Mode& mode = updated[j];
+    const auto [innovation, h] = measure(mode.x);
+    const Eigen::LLT<MatrixN> llt(h * mode.p * h.transpose() + noise);
+    if (llt.info() != Eigen::Success) return false;
+    const VectorN solved = llt.solve(innovation);
+    const Eigen::Matrix<double, 10, N> k = llt.solve(h * mode.p).transpose();  // P H^T S^-1
+    mode.x += k * innovation;
+    const Matrix10d a = Matrix10d::Identity() - k * h;
+    mode.p = a * mode.p * a.transpose() + k * noise * k.transpose();
+    const MatrixN l = llt.matrixL();
+    log_likelihood[j] = -0.5 * innovation.dot(solved) - l.diagonal().array().log().sum() -
+                        0.5 * N * std::log(2.0 * kPi);
+  }
+  modes_ = std::move(updated);
+  // The modes' probabilities (IMM step 5), normalised from the largest.
+  const double top = *std::max_element(log_likelihood.begin(), log_likelihood.end());
+  double total = 0.0;
+  for (std::size_t j = 0; j < modes_.size(); ++j)
+    total += modes_[j].probability *= std::exp(log_likelihood[j] - top);
+  if (total > 0.0)
+    for (Mode& mode : modes_) mode.probability /= total;
+  Combine();
   return true;
 }
 
-void AnchorFilter::Start(const Eigen::Vector3d& p, double t_s) {
+void AnchorFilter::Start(const Eigen::Vector3d& p, double t_s, const GeometricAnchor* radar) {
   started_ = true;
   t_s_ = last_ranging_s_ = t_s;
-  rejections_ = 0;
-  x_.head<3>() = p;
-  x_.tail<6>().setZero();
-  p_.setZero();
-  p_.diagonal().segment<3>(0).setConstant(kLidarSigma_m * kLidarSigma_m);
-  p_.diagonal().segment<3>(3).setConstant(kStartSpeedSigma_mps * kStartSpeedSigma_mps);
-  if (motion_ == Motion::kCa)
-    p_.diagonal().segment<3>(6).setConstant(kStartAccelSigma_mps2 * kStartAccelSigma_mps2);
+  rejections_ = lidar_rejections_ = 0;
+  // At a LiDAR fix on the ray, known to sigma_lidar; at a radar's fix, known
+  // as the radar knows it (the ray it agreed with may be up to
+  // RayGate::kGateMaxAge_s old: the following rays fix the rest). The
+  // velocity: unknown, but along a starting radar's line of sight u its
+  // radial velocity.
+  Eigen::Vector3d start = p;
+  Eigen::Matrix3d p_cov = kLidarSigma_m * kLidarSigma_m * Eigen::Matrix3d::Identity();
+  Eigen::Vector3d v = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d v_cov = kStartSpeedSigma_mps * kStartSpeedSigma_mps * Eigen::Matrix3d::Identity();
+  if (radar) {
+    const RadarFix fix = RadarFixOf(*radar);
+    start = fix.position;
+    p_cov = fix.noise;
+  }
+  if (radar && radar->has_range_rate) {
+    const Eigen::Vector3d u = (p - radar->sensor_w).normalized();
+    const Eigen::Matrix3d along = u * u.transpose();
+    v = radar->range_rate_mps * u;
+    v_cov = v_cov * (Eigen::Matrix3d::Identity() - along) +
+            kRangeRateSigma_mps * kRangeRateSigma_mps * along;
+  }
+  for (Mode& mode : modes_) {
+    mode.probability = 1.0 / static_cast<double>(modes_.size());
+    mode.x.setZero();
+    mode.x.head<3>() = start;
+    mode.x.segment<3>(3) = v;
+    mode.p.setZero();
+    mode.p.topLeftCorner<3, 3>() = p_cov;
+    mode.p.block<3, 3>(3, 3) = v_cov;
+    if (motion_ == Motion::kCa)
+      mode.p.diagonal().segment<3>(6).setConstant(kStartAccelSigma_mps2 * kStartAccelSigma_mps2);
+    if (motion_ == Motion::kImm) mode.p(9, 9) = kStartTurnSigma_rps * kStartTurnSigma_rps;
+  }
+  Combine();
+}
+
+std::optional<double> AnchorFilter::TurnProbability() const {
+  if (!started_) return std::nullopt;
+  double p = 0.0;
+  for (const Mode& mode : modes_)
+    if (mode.model == Model::kCt) p += mode.probability;
+  return p;
 }
 
 bool AnchorFilter::AgreesWithRay(Modality m, const GeometricAnchor& a) const {
@@ -92,54 +290,63 @@ void AnchorFilter::Observe(Modality m, const GeometricAnchor& a) {
     const Eigen::Vector3d& d = a.direction_w;
     const Eigen::Vector3d e1 = d.unitOrthogonal();
     const Eigen::Vector3d e2 = d.cross(e1);
-    const Eigen::Vector3d r = x_.head<3>() - a.origin_w;
-    Eigen::Matrix<double, 2, 9> h = Eigen::Matrix<double, 2, 9>::Zero();
-    h.block<1, 3>(0, 0) = e1.transpose();
-    h.block<1, 3>(1, 0) = e2.transpose();
-    const double rho = std::max(1.0, r.dot(d));
+    const double rho = std::max(1.0, (x_.head<3>() - a.origin_w).dot(d));
     const double var = std::pow(rho * kRaySigma_rad, 2) + kRayFloor_m * kRayFloor_m;
-    Update<2>(-Eigen::Vector2d(e1.dot(r), e2.dot(r)), h, var * Eigen::Matrix2d::Identity());
+    Update<2>(
+        [&](const Vector10d& x) {
+          const Eigen::Vector3d r = x.head<3>() - a.origin_w;
+          Eigen::Matrix<double, 2, 10> h = Eigen::Matrix<double, 2, 10>::Zero();
+          h.block<1, 3>(0, 0) = e1.transpose();
+          h.block<1, 3>(1, 0) = e2.transpose();
+          return std::pair{Eigen::Vector2d(-e1.dot(r), -e2.dot(r)), h};
+        },
+        Eigen::Matrix2d(var * Eigen::Matrix2d::Identity()));
     return;
   }
   bool accepted = false;
   if (started_) {
     PredictTo(a.t_s);
+    // A position measurement z_p: innovation z_p - p, Jacobian [I 0].
+    const auto position = [](const Eigen::Vector3d& z_p) {
+      return [z_p](const Vector10d& x) {
+        Eigen::Matrix<double, 3, 10> h = Eigen::Matrix<double, 3, 10>::Zero();
+        h.leftCols<3>().setIdentity();
+        return std::pair{Eigen::Vector3d(z_p - x.head<3>()), h};
+      };
+    };
     if (m == Modality::kLidar) {
-      Eigen::Matrix<double, 3, 9> h = Eigen::Matrix<double, 3, 9>::Zero();
-      h.leftCols<3>().setIdentity();
-      accepted = Update<3>(a.origin_w - x_.head<3>(), h,
-                           kLidarSigma_m * kLidarSigma_m * Eigen::Matrix3d::Identity());
+      accepted = Update<3>(position(a.origin_w), Eigen::Matrix3d(kLidarSigma_m * kLidarSigma_m *
+                                                                 Eigen::Matrix3d::Identity()));
     } else {
-      // The cluster's direction from the radar at its mean range (its
-      // angles are degrees off, its range centimetres) and its radial
-      // velocity (u . v at the predicted position).
-      const Eigen::Vector3d u = (a.origin_w - a.sensor_w).normalized();
-      const Eigen::Matrix3d along = u * u.transpose();
-      const double cross = a.range_m * kRadarAngleSigma_rad;
-      const Eigen::Matrix3d position_noise = kRangeSigma_m * kRangeSigma_m * along +
-                                             cross * cross * (Eigen::Matrix3d::Identity() - along);
-      const Eigen::Vector3d z_p = a.sensor_w + a.range_m * u;
+      // The cluster's position (RadarFixOf) and its radial velocity (u . v
+      // at the predicted position).
+      const RadarFix fix = RadarFixOf(a);
+      const Eigen::Matrix3d& position_noise = fix.noise;
+      const Eigen::Vector3d& z_p = fix.position;
       if (a.has_range_rate) {
-        const Eigen::Vector3d r = x_.head<3>() - a.sensor_w;
-        const double range = std::max(r.norm(), 1e-3);
-        const Eigen::Vector3d los = r / range;
-        const Eigen::Vector3d v = x_.segment<3>(3);
-        Eigen::Matrix<double, 4, 9> h = Eigen::Matrix<double, 4, 9>::Zero();
-        h.topLeftCorner<3, 3>().setIdentity();
-        h.block<1, 3>(3, 0) = ((v - los.dot(v) * los) / range).transpose();  // d(los . v)/dp
-        h.block<1, 3>(3, 3) = los.transpose();
         Eigen::Matrix4d noise = Eigen::Matrix4d::Zero();
         noise.topLeftCorner<3, 3>() = position_noise;
         noise(3, 3) = kRangeRateSigma_mps * kRangeRateSigma_mps;
-        Eigen::Vector4d innovation;
-        innovation << z_p - x_.head<3>(), a.range_rate_mps - los.dot(v);
-        accepted = Update<4>(innovation, h, noise);
+        accepted = Update<4>(
+            [&](const Vector10d& x) {
+              const Eigen::Vector3d r = x.head<3>() - a.sensor_w;
+              const double range = std::max(r.norm(), 1e-3);
+              const Eigen::Vector3d los = r / range;
+              const Eigen::Vector3d v = x.segment<3>(3);
+              Eigen::Matrix<double, 4, 10> h = Eigen::Matrix<double, 4, 10>::Zero();
+              h.topLeftCorner<3, 3>().setIdentity();
+              h.block<1, 3>(3, 0) = ((v - los.dot(v) * los) / range).transpose();  // d(los . v)/dp
+              h.block<1, 3>(3, 3) = los.transpose();
+              Eigen::Vector4d innovation;
+              innovation << z_p - x.head<3>(), a.range_rate_mps - los.dot(v);
+              return std::pair{innovation, h};
+            },
+            noise);
       } else {
-        Eigen::Matrix<double, 3, 9> h = Eigen::Matrix<double, 3, 9>::Zero();
-        h.leftCols<3>().setIdentity();
-        accepted = Update<3>(z_p - x_.head<3>(), h, position_noise);
+        accepted = Update<3>(position(z_p), position_noise);
       }
     }
+    if (m == Modality::kLidar) lidar_rejections_ = accepted ? 0 : lidar_rejections_ + 1;
     if (accepted) {
       last_ranging_s_ = t_s_;
       rejections_ = 0;
@@ -148,21 +355,26 @@ void AnchorFilter::Observe(Modality m, const GeometricAnchor& a) {
     }
     ++rejections_;
   }
-  // A (re)start: at a ranging fix that agrees with the ray, put on the ray. A
-  // radar's cluster is often something else on the same line of sight, and a
-  // static one confirms itself frame after frame: a radar fix starts a track
-  // only where none runs, once a second fix confirms it, and never takes
-  // one over.
-  if ((live && rejections_ < kMaxRejections) || !AgreesWithRay(m, a)) return;
+  // A (re)start at a ranging fix that agrees with the ray: a LiDAR fix the
+  // track rejected means the track is wrong. A radar's cluster is often
+  // something else on the same line of sight, and a static one confirms
+  // itself frame after frame: a radar fix starts a track only where none
+  // runs, once a second fix (at the ray's crossing of its range sphere)
+  // confirms it, and never takes one over.
+  if ((live && rejections_ < kMaxRejections && lidar_rejections_ < kMaxLidarRejections) ||
+      !AgreesWithRay(m, a))
+    return;
   const Eigen::Vector3d& o = ray_->origin_w;
   const Eigen::Vector3d& d = ray_->direction_w;
-  const Eigen::Vector3d p = m == Modality::kLidar
-                                ? ProjectOntoRay(a.origin_w, o, d)
-                                : RangeOnRay(a.sensor_w, a.range_m, a.origin_w, o, d);
+  // The ray crosses the radar's range sphere twice: the crossing nearer the
+  // pending fix, or (none) the centroid.
+  const Eigen::Vector3d& hint = pending_ ? pending_->first : a.origin_w;
+  const Eigen::Vector3d p =
+      m == Modality::kLidar ? a.origin_w : RangeOnRay(a.sensor_w, a.range_m, hint, o, d);
   const bool confirmed = pending_ && (p - pending_->first).norm() <=
                                          kConfirm_m + kMaxSpeed_mps * (a.t_s - pending_->second);
   if (m == Modality::kLidar || (confirmed && !live)) {
-    Start(p, std::max(a.t_s, ray_->t_s));
+    Start(p, std::max(a.t_s, ray_->t_s), m == Modality::kRadar ? &a : nullptr);
     pending_.reset();
   } else {
     pending_ = std::pair{p, a.t_s};

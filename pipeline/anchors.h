@@ -31,9 +31,10 @@
 // returns, the radar's largest cluster a car), and on the training episodes
 // the gate cut the best candidate's RMSE from 8.4 m to 1.7 m (dry) and from
 // 16 m to 4.4 m (rain, fog). See NOTES.md 2026-11-22 (5).
-// A seventh candidate is the track of a constant-acceleration AnchorFilter
-// (pipeline/anchor_filter.h) fed every anchor of every window: the fixes
-// filtered together instead of one carried forward (NOTES.md 2026-11-22 (6)).
+// A seventh candidate is the track of an AnchorFilter (pipeline/
+// anchor_filter.h; the IMM of a coordinated turn and a constant velocity)
+// fed every anchor of every window: the fixes filtered together instead of
+// one carried forward (NOTES.md 2026-11-22 (6) and (7)).
 #pragma once
 
 #include <Eigen/Core>
@@ -65,6 +66,7 @@ inline constexpr int kFilterCandidate = 6;
 // coarse and fine (3). Modalities in Modality order.
 inline constexpr int kAnchorFeatures = 54;
 inline constexpr int kFilterFeatureOffset = 47;
+inline constexpr int kFilterSigmaFeature = kFilterFeatureOffset + 4;
 
 // What the network sees of the anchors in one window. Candidates are in
 // normalised coordinates (p - centre) / scale like the network's output.
@@ -124,7 +126,7 @@ class AnchorTracker {
   double scale_m_;
   std::array<Held, kModalityCount> held_;
   std::array<Held, 2> gated_;  // LiDAR, radar: the fixes that passed the gate
-  AnchorFilter filter_{AnchorFilter::Motion::kCa};
+  AnchorFilter filter_{AnchorFilter::Motion::kImm};
 };
 
 }  // namespace uavsim::pipeline

@@ -49,8 +49,11 @@ std::optional<Eigen::Vector3d> EdgeLocalizer::OnWindow(const WindowInputs& windo
   for (const auto& frames : window.frames)
     for (const LatentFrame& f : frames)
       if (align.WindowOf(f.t_s) == window.window) impl_->has_seen_data = true;
-  if (anchored() &&
-      impl_->model->last_anchors().valid[static_cast<std::size_t>(kFilterCandidate)] > 0.5f)
+  const AnchorWindow& anchors = impl_->model->last_anchors();
+  if (anchored() && anchors.valid[static_cast<std::size_t>(kFilterCandidate)] > 0.5f &&
+      anchors.features[static_cast<std::size_t>(kFilterSigmaFeature)] *
+              AnchorTracker::kSigmaUnit_m <=
+          kConfirmedSigma_m)
     impl_->has_seen_track = true;
   if (!impl_->has_seen_data || !p.allFinite()) return std::nullopt;
   if (impl_->wait_for_track && anchored() && !impl_->has_seen_track) return std::nullopt;

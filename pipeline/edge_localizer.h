@@ -41,13 +41,18 @@ class EdgeLocalizer {
   // the previous window, a latent whose size is not latent_dim(), or a
   // non-finite latent value.
   // With WaitForTrack(true) an anchored model answers only from the first
-  // window in which its anchor filter holds a track (pipeline/
-  // anchor_filter.h: a LiDAR fix that agreed with the camera's ray, or two
-  // radar fixes that did and agreed with each other; before that its range
+  // window in which its anchor filter holds a confirmed track (pipeline/
+  // anchor_filter.h: started at a LiDAR fix that agreed with the camera's
+  // ray, or at two radar fixes that did and agreed with each other, and
+  // known to kConfirmedSigma_m at the window's end; before that its range
   // is a guess, metres off), as the EKF answers only once a track is
   // confirmed.
   std::optional<Eigen::Vector3d> OnWindow(const WindowInputs& window);
   void WaitForTrack(bool wait);
+  // A track's position standard deviation (sqrt of its covariance's trace)
+  // at or below which it is confirmed: a fresh start's unknown velocity
+  // (AnchorFilter::kStartSpeedSigma_mps) puts it above until a second fix.
+  static constexpr double kConfirmedSigma_m = 1.0;
 
   // Forgets the track (and any fix seen): the next window starts from a
   // zero state.

@@ -83,8 +83,8 @@ struct TrainOptions {
   // is at most this much farther from the truth than the nearest candidate:
   // which single fix happens to be nearest in a window is luck the features
   // cannot tell, the filtered track is right on average (NOTES.md
-  // 2026-11-22 (6)). 0: the nearest.
-  double filter_preference_m = 0.2;
+  // 2026-11-22 (6); 1 m since the IMM track, (7)). 0: the nearest.
+  double filter_preference_m = 1.0;
   // Anchored head: the position loss. true: the expected squared error of
   // the weighted hypotheses, sum_h w_h |c_h - y|^2 (a mixture: weight on a
   // far candidate costs its whole error, so the weights concentrate on the

@@ -139,7 +139,7 @@ const char* kTrainHelp =
     "                 (default 1; 0: position MSE only)\n"
     "  --filter-preference M  anchored head: the selection target is the filter's track\n"
     "                 when it is at most M metres farther from the truth than the nearest\n"
-    "                 candidate (default 0.2; 0: the nearest)\n"
+    "                 candidate (default 1; 0: the nearest)\n"
     "  --plateau N    halve the stage-2 learning rate after N epochs without a better\n"
     "                 validation loss (default 6; 0: never)\n"
     "  --position-loss L  anchored head: mixture (default: the weighted candidates' expected\n"

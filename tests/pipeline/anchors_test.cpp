@@ -508,48 +508,73 @@ TEST_CASE("AnchorTracker: the filter's track is the seventh candidate", "[pipeli
   const Eigen::Vector3d centre(1.0, 2.0, 3.0);
   AnchorTracker tracker(0.2, centre, 10.0);
   // Window 1 [0, 0.2): a ray along +x at 0.05 s, then a LiDAR centroid
-  // (20, 0.5, 0) at 0.1 s, 0.5 m from the ray (inside the 1.5 m gate): the
-  // track starts at its projection (20, 0, 0), at rest, at 0.1 s; a second
-  // ray at 0.15 s through (20, 0, 0) leaves it there.
+  // (20, 0, 0) at 0.1 s on it: the track starts there, at rest, at 0.1 s; a
+  // second ray at 0.15 s through (20, 0, 0) leaves it there.
   WindowAnchors arrived;
   arrived[kCamera] = {Ray({0.0, 0.0, 0.0}, {1.0, 0.0, 0.0}, 0.05),
                       Ray({0.0, 0.0, 0.0}, {1.0, 0.0, 0.0}, 0.15)};
-  arrived[kLidar] = {Point(20.0, 0.5, 0.0, 0.1)};
+  arrived[kLidar] = {Point(20.0, 0.0, 0.0, 0.1)};
   const AnchorWindow w1 = tracker.Update(1, arrived);
   CheckCandidate(w1, kFilterCandidate, true, (Eigen::Vector3d(20.0, 0.0, 0.0) - centre) / 10.0);
-  // The tracker's filter is the constant-acceleration one. The position's
-  // standard deviation at the deadline 0.2 s, per axis with [p, v, a]
-  // covariances P0 = diag(sL^2, sV^2, sA^2) from the start at 0.1 s: x has
-  // no ray information (predicted 0.1 s); y and z are predicted 0.05 s,
-  // updated by the ray at 0.15 s (noise (20 sigma_theta)^2 + floor^2, no
-  // innovation), predicted 0.05 s.
-  const double j = AnchorFilter::kJerkPsd;
-  const auto f = [](double dt) {
-    Eigen::Matrix3d m;
-    m << 1.0, dt, dt * dt / 2.0, 0.0, 1.0, dt, 0.0, 0.0, 1.0;
-    return m;
+  // The tracker's filter is the IMM of a quiet coordinated turn and a
+  // constant velocity. At rest (v = 0, so the turn's omega column is zero
+  // and both modes move [p, v] per axis by F = [1 dt; 0 1], with
+  // Q = q [dt^3/3 dt^2/2; dt^2/2 dt] of their own q), worked by hand: from
+  // the start at 0.1 s (P0 = diag(sL^2, sV^2), mode probabilities 1/2 each)
+  // to the ray at 0.15 s, its update of y and z (noise r2 = (20
+  // sigma_theta)^2 + floor^2, no innovation: the modes' likelihoods go as
+  // 1 / S, S = P_pp + r2 per axis, squared over the two axes and square
+  // rooted), then to the deadline 0.2 s; each step first mixes the modes
+  // (the same means: P_j <- sum_i pi_ij mu_i P_i / c_j, c_j = sum_i pi_ij
+  // mu_i, leaving a mode with probability 1 - exp(-dt / kModeSwitch_s)).
+  using Modes = std::array<std::array<Eigen::Matrix2d, 3>, 2>;  // [mode][axis]
+  const std::array<double, 2> q_mode = {AnchorFilter::kTurnAccelPsd, AnchorFilter::kAccelPsd};
+  std::array<double, 2> mu = {0.5, 0.5};
+  Modes modes;
+  for (auto& mode : modes)
+    for (auto& axis : mode)
+      axis = Eigen::Vector2d(std::pow(AnchorFilter::kLidarSigma_m, 2),
+                             std::pow(AnchorFilter::kStartSpeedSigma_mps, 2))
+                 .asDiagonal();
+  const auto step = [&](double dt) {
+    const double leave = 1.0 - std::exp(-dt / AnchorFilter::kModeSwitch_s);
+    const auto pi = [&](int i, int k) { return i == k ? 1.0 - leave : leave; };
+    Modes mixed;
+    std::array<double, 2> c{};
+    Eigen::Matrix2d f;
+    f << 1.0, dt, 0.0, 1.0;
+    for (int k = 0; k < 2; ++k) {
+      c[k] = pi(0, k) * mu[0] + pi(1, k) * mu[1];
+      Eigen::Matrix2d q;
+      q << dt * dt * dt / 3.0, dt * dt / 2.0, dt * dt / 2.0, dt;
+      for (int axis = 0; axis < 3; ++axis) {
+        const Eigen::Matrix2d p =
+            (pi(0, k) * mu[0] * modes[0][axis] + pi(1, k) * mu[1] * modes[1][axis]) / c[k];
+        mixed[k][axis] = f * p * f.transpose() + q_mode[k] * q;
+      }
+    }
+    modes = mixed, mu = c;
   };
-  const auto q = [j](double dt) {
-    Eigen::Matrix3d m;
-    m << std::pow(dt, 5) / 20.0, std::pow(dt, 4) / 8.0, std::pow(dt, 3) / 6.0,
-        std::pow(dt, 4) / 8.0, std::pow(dt, 3) / 3.0, dt * dt / 2.0, std::pow(dt, 3) / 6.0,
-        dt * dt / 2.0, dt;
-    return Eigen::Matrix3d(j * m);
-  };
-  const Eigen::Matrix3d p0 = Eigen::Vector3d(std::pow(AnchorFilter::kLidarSigma_m, 2),
-                                             std::pow(AnchorFilter::kStartSpeedSigma_mps, 2),
-                                             std::pow(AnchorFilter::kStartAccelSigma_mps2, 2))
-                                 .asDiagonal();
-  const Eigen::Matrix3d px = f(0.1) * p0 * f(0.1).transpose() + q(0.1);
-  Eigen::Matrix3d py = f(0.05) * p0 * f(0.05).transpose() + q(0.05);
+  step(0.05);
   const double r2 = std::pow(20.0 * AnchorFilter::kRaySigma_rad, 2) +
                     AnchorFilter::kRayFloor_m * AnchorFilter::kRayFloor_m;
-  const Eigen::Vector3d gain = py.col(0) / (py(0, 0) + r2);
-  py -= gain * py.row(0);  // (I - K H) P
-  py = f(0.05) * py * f(0.05).transpose() + q(0.05);
-  CheckFeatures(
-      w1, kFilterFeatureOffset + 4,
-      {std::sqrt(px(0, 0) + 2.0 * py(0, 0)) / AnchorTracker::kSigmaUnit_m, 0.1 / 5.0, 0.1});
+  std::array<double, 2> weight{};
+  for (int k = 0; k < 2; ++k) {
+    const double s_yz = modes[k][1](0, 0) + r2;  // y and z alike
+    weight[k] = mu[k] / s_yz;
+    for (int axis = 1; axis < 3; ++axis) {
+      Eigen::Matrix2d& p = modes[k][axis];
+      const Eigen::Vector2d gain = p.col(0) / s_yz;
+      p -= gain * p.row(0);  // (I - K H) P
+    }
+  }
+  mu = {weight[0] / (weight[0] + weight[1]), weight[1] / (weight[0] + weight[1])};
+  step(0.05);
+  double trace = 0.0;
+  for (int k = 0; k < 2; ++k)
+    for (int axis = 0; axis < 3; ++axis) trace += mu[k] * modes[k][axis](0, 0);
+  CheckFeatures(w1, kFilterFeatureOffset + 4,
+                {std::sqrt(trace) / AnchorTracker::kSigmaUnit_m, 0.1 / 5.0, 0.1});
   // Nothing more arrives: the track coasts, then ends kMaxPredict_s after
   // its LiDAR fix.
   const auto coast_windows = static_cast<std::int64_t>(AnchorFilter::kMaxPredict_s / 0.2);

@@ -537,6 +537,7 @@ TEST_CASE("UavLocModel: save and load round trip, with the JSON sidecar", "[pipe
   REQUIRE(a.size() == b.size());
   for (const auto& p : a) CHECK(torch::equal(p.value(), b[p.key()]));
   torch::Generator gen = torch::make_generator<torch::CPUGeneratorImpl>(7);
+  AnchorFilter track(AnchorFilter::Motion::kImm);
   for (std::int64_t k = 1; k <= 5; ++k) {
     const WindowInputs w = RandomWindow(k, 8, 0.2, gen);
     CHECK(model->Step(w) == loaded->Step(w));
@@ -671,7 +672,10 @@ TEST_CASE("EdgeLocalizer: waiting for a track, an anchored model answers from it
   // Windows 1-3: a camera ray along +x from the origin and a radar point 30
   // m off the ray (no track: it does not agree with the ray, and a radar
   // never starts one alone); window 4: a LiDAR point 0.3 m from the ray at
-  // 20 m, which starts the anchor filter's track.
+  // 20 m, 0.13 s before the window's end, which starts the anchor filter's
+  // track with an unknown velocity (its sigma at the deadline above
+  // kConfirmedSigma_m: sqrt(3 (0.15^2 + 6^2 0.13^2)) = 1.37 m); window 5: a
+  // second, which confirms it.
   torch::Generator gen = torch::make_generator<torch::CPUGeneratorImpl>(9);
   const auto frame = [&](double t, const GeometricAnchor& a) {
     LatentFrame f;
@@ -692,21 +696,29 @@ TEST_CASE("EdgeLocalizer: waiting for a track, an anchored model answers from it
   GeometricAnchor near = far;
   near.origin_w = {20.0, 0.3, 0.0};
   near.range_m = near.origin_w.norm();
-  for (std::int64_t k = 1; k <= 4; ++k) {
+  AnchorFilter track(AnchorFilter::Motion::kImm);
+  for (std::int64_t k = 1; k <= 5; ++k) {
     WindowInputs w;
     w.window = k;
     const double t = 0.2 * static_cast<double>(k) - 0.15;
     w.frames[static_cast<std::size_t>(Modality::kCamera)].push_back(frame(t, ray));
     w.frames[static_cast<std::size_t>(Modality::kRadar)].push_back(frame(t + 0.01, far));
-    if (k == 4)
+    if (k >= 4)
       w.frames[static_cast<std::size_t>(Modality::kLidar)].push_back(frame(t + 0.02, near));
     INFO("window " << k);
     CHECK(answers->OnWindow(w).has_value());
-    CHECK(waits->OnWindow(w).has_value() == (k == 4));
+    CHECK(waits->OnWindow(w).has_value() == (k == 5));
+    // The track's sigma at the deadline, as the tracker's filter sees it.
+    for (const Modality m : {Modality::kCamera, Modality::kRadar, Modality::kLidar})  // by t_s
+      for (const LatentFrame& f : w.frames[static_cast<std::size_t>(m)]) track.Observe(m, f.anchor);
+    const std::optional<AnchorFilter::Estimate> e = track.PredictAt(0.2 * static_cast<double>(k));
+    CHECK(e.has_value() == (k >= 4));
+    if (k == 4) CHECK(e->sigma_m == Approx(1.37).margin(0.01));
+    if (k == 5) CHECK(e->sigma_m < EdgeLocalizer::kConfirmedSigma_m);
   }
-  // The track once seen, the model answers on (the state carries it).
+  // The track once confirmed, the model answers on (the state carries it).
   WindowInputs empty;
-  empty.window = 5;
+  empty.window = 6;
   CHECK(waits->OnWindow(empty).has_value());
   // Reset forgets it.
   waits->Reset();
