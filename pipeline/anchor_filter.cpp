@@ -35,17 +35,15 @@ namespace {
 using Vector10d = Eigen::Matrix<double, 10, 1>;
 using Matrix10d = Eigen::Matrix<double, 10, 10>;
 
-// The per-axis [p, v, a] blocks (f, q) spread over the 10-state (omega
-// kept, without noise).
-void PerAxis(const Eigen::Matrix3d& f, const Eigen::Matrix3d& q, Matrix10d& big_f,
-             Matrix10d& big_q) {
-  big_f.setIdentity();
-  big_q.setZero();
+// A per-axis [p, v, a] block m spread over the 10-state: m(r, c) I in
+// block (r, c); omega's row and column those of the identity (a transition)
+// or zero (a noise).
+Matrix10d PerAxis(const Eigen::Matrix3d& m, bool transition) {
+  Matrix10d big = transition ? Matrix10d(Matrix10d::Identity()) : Matrix10d(Matrix10d::Zero());
   for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) {
-      big_f.block<3, 3>(3 * r, 3 * c) = f(r, c) * Eigen::Matrix3d::Identity();
-      big_q.block<3, 3>(3 * r, 3 * c) = q(r, c) * Eigen::Matrix3d::Identity();
-    }
+    for (int c = 0; c < 3; ++c)
+      big.block<3, 3>(3 * r, 3 * c) = m(r, c) * Eigen::Matrix3d::Identity();
+  return big;
 }
 
 // White acceleration of spectral density q on [p, v] per axis.
@@ -146,8 +144,7 @@ void AnchorFilter::PredictTo(double t_s) {
     Vector10d next;
     if (mode.model == Model::kCt) {
       CoordinatedTurn(mode.x, dt, next, f);
-      Matrix10d unused;
-      PerAxis(Eigen::Matrix3d::Identity(), WhiteAcceleration(kTurnAccelPsd, dt), unused, q);
+      q = PerAxis(WhiteAcceleration(kTurnAccelPsd, dt), false);
       q(9, 9) = kTurnRatePsd * dt;
     } else {
       Eigen::Matrix3d f3 = Eigen::Matrix3d::Identity(), q3;
@@ -162,7 +159,8 @@ void AnchorFilter::PredictTo(double t_s) {
             j * d4 / 8.0, j * d3 / 3.0, j * d2 / 2.0,     //
             j * d3 / 6.0, j * d2 / 2.0, j * dt;
       }
-      PerAxis(f3, q3, f, q);
+      f = PerAxis(f3, true);
+      q = PerAxis(q3, false);
       next = f * mode.x;
     }
     mode.x = next;

@@ -118,9 +118,10 @@ class AnchorFilter {
   // it predicts for kMaxPredict_s (a candidate whose age the head sees).
   static constexpr double kMaxCoast_s = 2.0;
   static constexpr double kMaxPredict_s = 5.0;
-  // Ranging fixes in a row outside the gate before one that agrees with the
-  // ray restarts the track; LiDAR fixes (whose clusters, gated by the ray,
-  // are the drone in clear air).
+  // Ranging fixes in a row outside the gate after which radar fixes that
+  // agree with the ray are held to confirm a start; LiDAR fixes in a row
+  // outside the gate after which one that agrees with the ray restarts the
+  // track (a LiDAR cluster gated by the ray is the drone in clear air).
   static constexpr int kMaxRejections = 3;
   static constexpr int kMaxLidarRejections = 1;
   // A second radar fix confirms a first within this distance (plus the
