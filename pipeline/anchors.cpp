@@ -185,4 +185,35 @@ AnchorWindow AnchorTracker::Update(std::int64_t k, const WindowAnchors& all) {
   return w;
 }
 
+std::array<Eigen::Vector3d, kAnchorCandidates> MedianCandidateOffsets(
+    const std::vector<AnchorWindow>& windows, const std::vector<Eigen::Vector3d>& truth,
+    double scale_m, double radius_m, std::size_t min_windows) {
+  if (windows.size() != truth.size())
+    throw std::invalid_argument("MedianCandidateOffsets: " + std::to_string(windows.size()) +
+                                " windows but " + std::to_string(truth.size()) + " truths");
+  if (!(std::isfinite(scale_m) && scale_m > 0.0 && std::isfinite(radius_m) && radius_m > 0.0))
+    throw std::invalid_argument(
+        "MedianCandidateOffsets: scale_m and radius_m must be finite and > 0");
+  std::array<Eigen::Vector3d, kAnchorCandidates> offsets;
+  for (int c = 0; c < kAnchorCandidates; ++c) {
+    const auto ci = static_cast<std::size_t>(c);
+    std::array<std::vector<double>, 3> axes;
+    for (std::size_t i = 0; i < windows.size(); ++i) {
+      if (windows[i].valid[ci] < 0.5f) continue;
+      const Eigen::Vector3d d = scale_m * (windows[i].candidates[ci] - truth[i]);
+      if (!(d.norm() <= radius_m)) continue;
+      for (int j = 0; j < 3; ++j) axes[static_cast<std::size_t>(j)].push_back(d[j]);
+    }
+    offsets[ci].setZero();
+    const std::size_t n = axes[0].size();
+    if (n == 0 || n < min_windows) continue;
+    for (int j = 0; j < 3; ++j) {
+      std::vector<double>& a = axes[static_cast<std::size_t>(j)];
+      std::sort(a.begin(), a.end());
+      offsets[ci][j] = n % 2 ? a[n / 2] : 0.5 * (a[n / 2 - 1] + a[n / 2]);
+    }
+  }
+  return offsets;
+}
+
 }  // namespace uavsim::pipeline

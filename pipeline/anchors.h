@@ -129,4 +129,18 @@ class AnchorTracker {
   AnchorFilter filter_{AnchorFilter::Motion::kImm};
 };
 
+// The offset of each candidate from the target's reference point, in
+// metres: per axis, the median of candidate - truth over the windows in
+// which the candidate is valid and within radius_m of the truth; zero for a
+// candidate with fewer than min_windows such windows. The candidates locate
+// what the sensors see of the target, not its reference point: seen from
+// below, the rotor discs' plane, 4 cm above the body's centre (the camera's
+// coverage centroid, the LiDAR's hits), and the radar's nearest scatterer
+// (NOTES.md 2026-11-22 (8)). windows[i]'s candidates and truth[i] are
+// normalised by scale_m. Throws std::invalid_argument for sizes that differ
+// or scale_m, radius_m not finite and > 0.
+std::array<Eigen::Vector3d, kAnchorCandidates> MedianCandidateOffsets(
+    const std::vector<AnchorWindow>& windows, const std::vector<Eigen::Vector3d>& truth,
+    double scale_m, double radius_m, std::size_t min_windows);
+
 }  // namespace uavsim::pipeline

@@ -361,6 +361,25 @@ torch::Tensor ForwardSequence(UavLocModel& model, const WindowSequence& s,
   return model->forward((s.latents * mask.unsqueeze(2)).unsqueeze(0), mask.unsqueeze(0), &anchors);
 }
 
+// The candidates' offsets from the truth over the training sequences as
+// the edge's tracker would give them (MedianCandidateOffsets).
+std::vector<Eigen::Vector3d> CandidateOffsets(const std::vector<WindowSequence>& train,
+                                              const UavLocModelConfig& c, double radius_m) {
+  std::vector<AnchorWindow> windows;
+  std::vector<Eigen::Vector3d> truth;
+  for (const WindowSequence& s : train) {
+    const std::vector<AnchorWindow> a = TrackAnchors(s, 0, s.mask, c);
+    windows.insert(windows.end(), a.begin(), a.end());
+    const torch::Tensor y = s.truth.to(torch::kFloat64).contiguous();
+    const auto acc = y.accessor<double, 2>();
+    for (std::int64_t k = 0; k < y.size(0); ++k)
+      truth.emplace_back(acc[k][0], acc[k][1], acc[k][2]);
+  }
+  const auto offsets = MedianCandidateOffsets(windows, truth, c.position_scale_m, radius_m,
+                                              TrainOptions::kMinOffsetWindows);
+  return {offsets.begin(), offsets.end()};
+}
+
 // Cross-entropy of the anchored head's weights log_w [B, K, H] over its
 // hypotheses h [B, K, H, 3] against the valid candidate nearest the truth
 // [B, K, 3] (the filter's track preferred by `preference`, normalised) if
@@ -572,6 +591,9 @@ void TrainOptions::Validate() const {
               std::isfinite(filter_preference_m),
           "selection_weight, selection_radius_m and filter_preference_m",
           "must be finite, >= 0, > 0 and >= 0");
+  // The model keeps offsets within 1 m per axis (kMaxCandidateOffset_m).
+  require(offset_calibration_radius_m >= 0 && offset_calibration_radius_m <= 1.0,
+          "offset_calibration_radius_m", "must be in [0, 1] m");
 }
 
 TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& o, const ModelManifest& manifest,
@@ -615,6 +637,10 @@ TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& o, const ModelM
   const TeAlign align(config.te_align());
   const std::vector<WindowSequence> train = AlignAll(data.train, encoders, align, norm);
   const std::vector<WindowSequence> val = AlignAll(data.validation, encoders, align, norm);
+  if (o.anchored && o.offset_calibration_radius_m > 0.0) {
+    config.candidate_offset_m = CandidateOffsets(train, config, o.offset_calibration_radius_m);
+    report.candidate_offset_m = config.candidate_offset_m;
+  }
   StageReport fusion_stage;
   UavLocModel model =
       TrainFusion(train, val, config, o, (checkpoints / manifest.edge).string(), fusion_stage);
@@ -663,6 +689,10 @@ std::string ReportJson(const TrainReport& r, const TrainOptions& o) {
                            {"radius_m", o.selection_radius_m},
                            {"filter_preference_m", o.filter_preference_m}};
     j["position_loss"] = o.mixture_loss ? "mixture" : "mean";
+    j["offset_calibration_radius_m"] = o.offset_calibration_radius_m;
+    core::Json offsets = core::Json::array();
+    for (const Eigen::Vector3d& v : r.candidate_offset_m) offsets.push_back({v.x(), v.y(), v.z()});
+    j["candidate_offset_m"] = offsets;
   }
   j["stage2_plateau_epochs"] = o.stage2_plateau_epochs;
   j["learning_rate"] = {{"stage1", o.stage1_lr}, {"stage2", o.stage2_lr}};

@@ -10,6 +10,7 @@
 // checkpointed, deterministic for a seed and thread count. Torch-free header.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -83,8 +84,17 @@ struct TrainOptions {
   // is at most this much farther from the truth than the nearest candidate:
   // which single fix happens to be nearest in a window is luck the features
   // cannot tell, the filtered track is right on average (NOTES.md
-  // 2026-11-22 (6); 1 m since the IMM track, (7)). 0: the nearest.
-  double filter_preference_m = 1.0;
+  // 2026-11-22 (6); 1 m since the IMM track, (7); 2 m since (8): the head
+  // then follows the track where it blended in worse fixes). 0: the nearest.
+  double filter_preference_m = 2.0;
+  // Anchored head: calibrate each candidate's offset from the target's
+  // reference point (the median over the training windows in which it is
+  // within this radius of the truth, MedianCandidateOffsets; the model
+  // subtracts it, NOTES.md 2026-11-22 (8)). 0: no calibration.
+  double offset_calibration_radius_m = 1.0;
+  // A candidate valid and within the radius in fewer training windows keeps
+  // a zero offset.
+  static constexpr std::size_t kMinOffsetWindows = 50;
   // Anchored head: the position loss. true: the expected squared error of
   // the weighted hypotheses, sum_h w_h |c_h - y|^2 (a mixture: weight on a
   // far candidate costs its whole error, so the weights concentrate on the
@@ -119,7 +129,8 @@ struct Evaluation {
 
 struct TrainReport {
   std::vector<StageReport> stages;
-  Evaluation test;  // on the held-out test split
+  std::vector<Eigen::Vector3d> candidate_offset_m;  // empty: not calibrated
+  Evaluation test;                                  // on the held-out test split
 };
 
 // Trains on `data` and writes the model folder `out_dir` (model.json from

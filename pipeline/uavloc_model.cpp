@@ -1,6 +1,7 @@
 #include "pipeline/uavloc_model.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -36,6 +37,14 @@ void Visit(V& v, UavLocModelConfig& c) {
   v("expand", c.expand, Rule::Range(1, 64));
   v("anchored", c.anchored);
   v("anchor_features", c.anchor_features);
+  v("candidate_offset_m", c.candidate_offset_m,
+    Rule::Range(-UavLocModelConfig::kMaxCandidateOffset_m,
+                UavLocModelConfig::kMaxCandidateOffset_m),
+    0, kAnchorCandidates);
+  v.Check(c.candidate_offset_m.empty() || c.candidate_offset_m.size() == kAnchorCandidates,
+          "candidate_offset_m",
+          "expected none or " + std::to_string(kAnchorCandidates) + " offsets, got " +
+              std::to_string(c.candidate_offset_m.size()));
   v("position_centre_m", c.position_centre_m);
   v("position_scale_m", c.position_scale_m, Rule::Positive());
 }
@@ -79,6 +88,14 @@ void UavLocModelConfig::Validate() const {
         "UavLocModel: an anchored head with " + std::to_string(anchor_features) +
         " anchor features (this build's has " + std::to_string(kAnchorFeatures) +
         "): train the model again (uavsim train)");
+  if (!candidate_offset_m.empty() && candidate_offset_m.size() != kAnchorCandidates)
+    throw std::invalid_argument("UavLocModel: candidate_offset_m must have none or " +
+                                std::to_string(kAnchorCandidates) + " offsets, got " +
+                                std::to_string(candidate_offset_m.size()));
+  for (const Eigen::Vector3d& o : candidate_offset_m)
+    if (!(o.array().abs() <= kMaxCandidateOffset_m).all())
+      throw std::invalid_argument("UavLocModel: candidate offsets must be finite and within " +
+                                  core::FormatNumber(kMaxCandidateOffset_m) + " m per axis");
   if (!position_centre_m.allFinite() || !std::isfinite(position_scale_m) || position_scale_m <= 0.0)
     throw std::invalid_argument(
         "UavLocModel: position_centre_m must be finite and position_scale_m finite and > 0, got " +
@@ -158,12 +175,24 @@ torch::Tensor UavLocModelImpl::Anchored(const torch::Tensor& head, const torch::
       logits.masked_fill(allowed < 0.5, -std::numeric_limits<float>::infinity()), -1);
   // [..., C + 2, 3]; a ray-less window's on-ray point is only the origin
   // row of zeros, weighed 0.
-  const torch::Tensor h = torch::cat(
-      {candidates, (on_ray * ray_valid).unsqueeze(-2), head.narrow(-1, c + 2, 3).unsqueeze(-2)},
-      -2);
+  const torch::Tensor h =
+      torch::cat({CorrectedCandidates(candidates), (on_ray * ray_valid).unsqueeze(-2),
+                  head.narrow(-1, c + 2, 3).unsqueeze(-2)},
+                 -2);
   if (log_weights) *log_weights = log_w;
   if (hypotheses) *hypotheses = h;
   return (log_w.exp().unsqueeze(-1) * h).sum(-2);
+}
+
+torch::Tensor UavLocModelImpl::CorrectedCandidates(const torch::Tensor& candidates) const {
+  if (config_.candidate_offset_m.empty()) return candidates;
+  std::array<float, 3 * kAnchorCandidates> offset;
+  for (std::size_t c = 0; c < kAnchorCandidates; ++c)
+    for (std::size_t j = 0; j < 3; ++j)
+      offset[3 * c + j] = static_cast<float>(config_.candidate_offset_m[c][static_cast<int>(j)] /
+                                             config_.position_scale_m);
+  return candidates -
+         torch::from_blob(offset.data(), {kAnchorCandidates, 3}).to(candidates.dtype());
 }
 
 void UavLocModelImpl::ResetState() {

@@ -70,6 +70,12 @@ struct UavLocModelConfig {
   // kAnchorFeatures (41 for the first anchored head, with the residual; 47
   // before the filter's track: such models need training again).
   int anchor_features = kAnchorFeatures;
+  // Anchored head: each candidate's offset from the target's reference
+  // point in metres, subtracted before the head weighs it (the trainer's
+  // MedianCandidateOffsets on the training episodes); empty: none, else
+  // kAnchorCandidates of them.
+  std::vector<Eigen::Vector3d> candidate_offset_m;
+  static constexpr double kMaxCandidateOffset_m = 1.0;  // per axis
   // Output normalisation: the head predicts (p - centre) / scale, p in
   // world ENU metres.
   Eigen::Vector3d position_centre_m = Eigen::Vector3d::Zero();
@@ -137,11 +143,16 @@ class UavLocModelImpl : public torch::nn::Module {
  private:
   torch::Tensor StepAligned(const AlignedWindow& window, const AnchorWindow& anchors);
   // The head's output [..., kHypotheses + 4] (logits, a, t) -> position
-  // [..., 3] (anchored models).
+  // [..., 3] (anchored models). The candidate hypotheses are the
+  // candidates less their offsets (CorrectedCandidates).
   torch::Tensor Anchored(const torch::Tensor& head, const torch::Tensor& candidates,
                          const torch::Tensor& valid, const torch::Tensor& ray,
                          torch::Tensor* log_weights = nullptr,
                          torch::Tensor* hypotheses = nullptr) const;
+
+  // candidates [..., kAnchorCandidates, 3] (normalised) less
+  // config.candidate_offset_m.
+  torch::Tensor CorrectedCandidates(const torch::Tensor& candidates) const;
 
   UavLocModelConfig config_;
   TeAlign te_align_;

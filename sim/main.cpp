@@ -113,7 +113,8 @@ const char* kTrainHelp =
     "usage: uavsim train SCENARIO.json [--out MODEL] [--quick] [--seed N] [--episodes N]\n"
     "                    [--episode-s S] [--lr RATE] [--bottleneck ib|mlp] [--head H]\n"
     "                    [--selection-weight W] [--filter-preference M] [--plateau N]\n"
-    "                    [--position-loss L] [--threads N] [--data FILE] [--label-gate M,DEG]\n"
+    "                    [--offset-calibration M] [--position-loss L] [--threads N]\n"
+    "                    [--data FILE] [--label-gate M,DEG]\n"
     "                    [--set /ptr=value] [--force] [--quiet]\n"
     "\n"
     "Generates training data by simulation and trains the UAVLoc model with LibTorch on\n"
@@ -139,7 +140,10 @@ const char* kTrainHelp =
     "                 (default 1; 0: position MSE only)\n"
     "  --filter-preference M  anchored head: the selection target is the filter's track\n"
     "                 when it is at most M metres farther from the truth than the nearest\n"
-    "                 candidate (default 1; 0: the nearest)\n"
+    "                 candidate (default 2; 0: the nearest)\n"
+    "  --offset-calibration M  anchored head: subtract from each candidate its median\n"
+    "                 offset from the truth over the training windows where it is within\n"
+    "                 M metres, at most 1 (default 1; 0: none)\n"
     "  --plateau N    halve the stage-2 learning rate after N epochs without a better\n"
     "                 validation loss (default 6; 0: never)\n"
     "  --position-loss L  anchored head: mixture (default: the weighted candidates' expected\n"
@@ -330,7 +334,7 @@ int Train(int argc, char** argv) {
       Parse("train", argc, argv, 2,
             {"--out", "--seed", "--episodes", "--episode-s", "--threads", "--set", "--data", "--lr",
              "--bottleneck", "--label-gate", "--head", "--selection-weight", "--filter-preference",
-             "--plateau", "--position-loss"},
+             "--plateau", "--position-loss", "--offset-calibration"},
             {"--quick", "--quiet", "--force", "--help"});
   if (a.Has("--help")) return std::cout << kTrainHelp, kExitOk;
   const std::string& file = OneScenario("train", a);
@@ -358,6 +362,9 @@ int Train(int argc, char** argv) {
   if (auto v = a.Value("--filter-preference"))
     c.filter_preference_m =
         NumberOption("train", "--filter-preference", *v, 0.0, 100.0, "metres in [0, 100]");
+  if (auto v = a.Value("--offset-calibration"))
+    c.offset_calibration_radius_m =
+        NumberOption("train", "--offset-calibration", *v, 0.0, 1.0, "metres in [0, 1]");
   if (auto v = a.Value("--plateau"))
     c.plateau_epochs = static_cast<int>(UnsignedOption("train", "--plateau", *v, 10000));
   if (auto v = a.Value("--position-loss")) {

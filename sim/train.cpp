@@ -207,6 +207,8 @@ pipeline::TrainReport RunTraining(const Scenario& base, const TrainCommand& c) {
   t.anchored = !c.paper_head;
   if (c.selection_weight >= 0) t.selection_weight = c.selection_weight;
   if (c.filter_preference_m >= 0) t.filter_preference_m = c.filter_preference_m;
+  if (c.offset_calibration_radius_m >= 0)
+    t.offset_calibration_radius_m = c.offset_calibration_radius_m;
   if (c.plateau_epochs >= 0) t.stage2_plateau_epochs = c.plateau_epochs;
   if (!c.position_loss.empty()) t.mixture_loss = c.position_loss == "mixture";
   t.stage1_label_gate_m = c.label_gate_m;

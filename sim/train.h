@@ -55,9 +55,10 @@ struct TrainCommand {
   bool paper_head = false;            // the paper's linear edge head instead of the anchored one
   double selection_weight = -1.0;     // < 0: TrainOptions' default
   double filter_preference_m = -1.0;  // < 0: TrainOptions' default
-  int plateau_epochs = -1;            // < 0: TrainOptions' default
-  std::string position_loss;          // mixture or mean; empty: TrainOptions' default
-  double label_gate_m = 0.0;          // stage 1 label gate (pipeline/trainer.h); 0: off
+  double offset_calibration_radius_m = -1.0;  // < 0: TrainOptions' default; 0: none
+  int plateau_epochs = -1;                    // < 0: TrainOptions' default
+  std::string position_loss;                  // mixture or mean; empty: TrainOptions' default
+  double label_gate_m = 0.0;                  // stage 1 label gate (pipeline/trainer.h); 0: off
   double label_gate_deg = 0.0;
   int threads = 1;  // LibTorch intra-op threads (see NOTES.md: 1 is fastest here)
   // Episode file: read if it exists (no simulation), else written after

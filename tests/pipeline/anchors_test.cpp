@@ -628,4 +628,58 @@ TEST_CASE("TeAlign: AnchorsOf takes the window's anchored frames in capture orde
   for (const auto& anchors : align.AnchorsOf(empty)) CHECK(anchors.empty());
 }
 
+TEST_CASE("MedianCandidateOffsets: the per-axis median within the radius, in metres",
+          "[pipeline]") {
+  // Scale 10: candidates and truths normalised, offsets in metres.
+  const double scale = 10.0;
+  std::vector<AnchorWindow> windows;
+  std::vector<Eigen::Vector3d> truth;
+  // The track (candidate 6) in 7 windows: offsets (metres) whose per-axis
+  // medians are 0.04, -0.01, 0.05 (sorted x: -0.3 0.0 0.02 0.04 0.06 0.1
+  // 0.5), and one 3 m off (outside the 1 m radius: left out, else the x
+  // median would be 0.05). The LiDAR point (candidate 0) in 4 of them:
+  // median of an even count, the mean of the middle two. The radar point
+  // (candidate 1) in 2, below min_windows 3: zero.
+  const std::vector<Eigen::Vector3d> track = {
+      {0.04, -0.01, 0.05}, {0.1, 0.2, 0.05},   {-0.3, -0.4, 0.05}, {0.0, 0.0, 0.06},
+      {0.5, -0.02, 0.0},   {0.02, -0.01, 0.3}, {0.06, 0.3, -0.2},  {3.0, 0.0, 0.0}};
+  const std::vector<double> lidar_x = {0.1, -0.2, 0.3, 0.0};
+  for (std::size_t i = 0; i < track.size(); ++i) {
+    AnchorWindow w;
+    for (Eigen::Vector3d& c : w.candidates) c.setZero();
+    const Eigen::Vector3d y(1.0 + i, -2.0, 3.0 * i);  // normalised
+    w.valid[kFilterCandidate] = 1.0f;
+    w.candidates[kFilterCandidate] = y + track[i] / scale;
+    if (i < lidar_x.size()) {
+      w.valid[0] = 1.0f;
+      w.candidates[0] = y + Eigen::Vector3d(lidar_x[i], 0.0, 0.01) / scale;
+    }
+    if (i < 2) {
+      w.valid[1] = 1.0f;
+      w.candidates[1] = y + Eigen::Vector3d(0.2, 0.2, 0.2) / scale;
+    }
+    // An invalid candidate's position does not count.
+    w.candidates[2] = y + Eigen::Vector3d(0.5, 0.5, 0.5) / scale;
+    windows.push_back(w);
+    truth.push_back(y);
+  }
+  const auto offsets = MedianCandidateOffsets(windows, truth, scale, 1.0, 3);
+  CheckVector(offsets[kFilterCandidate], {0.04, -0.01, 0.05}, 1e-12);
+  CheckVector(offsets[0], {0.05, 0.0, 0.01}, 1e-12);  // x: (0.0 + 0.1) / 2
+  for (int c = 1; c < kFilterCandidate; ++c) CheckVector(offsets[c], {0.0, 0.0, 0.0}, 0.0);
+  // The radius counts in metres: at 0.45 m the track's two offsets of
+  // 0.50 m are left out too; of the five left, (0.04, -0.01, 0.05), (0.1,
+  // 0.2, 0.05), (0.0, 0.0, 0.06), (0.02, -0.01, 0.3), (0.06, 0.3, -0.2), the
+  // medians are 0.04, 0.0, 0.05; five are fewer than min_windows 6.
+  CheckVector(MedianCandidateOffsets(windows, truth, scale, 0.45, 3)[kFilterCandidate],
+              {0.04, 0.0, 0.05}, 1e-12);
+  CheckVector(MedianCandidateOffsets(windows, truth, scale, 0.45, 6)[kFilterCandidate],
+              {0.0, 0.0, 0.0}, 0.0);
+  truth.pop_back();
+  CHECK_THROWS_AS(MedianCandidateOffsets(windows, truth, scale, 1.0, 3), std::invalid_argument);
+  truth.emplace_back(0.0, 0.0, 0.0);
+  CHECK_THROWS_AS(MedianCandidateOffsets(windows, truth, 0.0, 1.0, 3), std::invalid_argument);
+  CHECK_THROWS_AS(MedianCandidateOffsets(windows, truth, scale, -1.0, 3), std::invalid_argument);
+}
+
 }  // namespace uavsim::pipeline

@@ -15,6 +15,7 @@
 #include "pipeline/torch_runtime.h"
 #include "pipeline/uavloc_model.h"
 #include "sim/core/error.h"
+#include "sim/core/json_io.h"
 #include "test_support.h"
 
 namespace uavsim::pipeline {
@@ -283,6 +284,73 @@ TEST_CASE("UavLocModel anchored: the output is the softmax mix of the valid cand
   CHECK(torch::equal(hypotheses.narrow(2, 0, c), anchors.candidates));
   CHECK(torch::allclose(hypotheses.select(2, c + 1).to(torch::kFloat64), head.narrow(-1, c + 2, 3),
                         0.0, 1e-6));
+}
+
+TEST_CASE("UavLocModel anchored: calibrated candidate offsets are subtracted from the candidates",
+          "[pipeline]") {
+  UavLocModelConfig config = AnchoredConfig(8);
+  config.position_scale_m = 20.0;
+  UavLocModelConfig calibrated = config;
+  for (int i = 0; i < kAnchorCandidates; ++i)
+    calibrated.candidate_offset_m.emplace_back(0.01 * i, -0.02 * i, 0.03 + 0.1 * (i == 6));
+  InitTorch(1, 40);
+  UavLocModel plain(config);
+  InitTorch(1, 40);
+  UavLocModel model(calibrated);
+  torch::NoGradGuard no_grad;
+  const int64_t b = 2, k = 6, c = kAnchorCandidates;
+  const torch::Tensor latents = torch::randn({b, k, 3, 8});
+  const torch::Tensor mask = torch::bernoulli(torch::full({b, k, 3}, 0.7));
+  const AnchorBatch anchors = RandomAnchors(b, k, 0.6);
+  torch::Tensor log_w, hypotheses, plain_log_w;
+  const torch::Tensor out = model->forward(latents, mask, &anchors, &log_w, &hypotheses);
+  const torch::Tensor plain_out = plain->forward(latents, mask, &anchors, &plain_log_w);
+  // The weights do not change (the features are the uncorrected ones); each
+  // candidate hypothesis moves by -offset / scale, so the output by the
+  // weighted sum of that.
+  CHECK(torch::equal(log_w, plain_log_w));
+  double worst_h = 0.0, worst_out = 0.0;
+  for (int64_t s = 0; s < b; ++s)
+    for (int64_t w = 0; w < k; ++w) {
+      Eigen::Vector3d shift = Eigen::Vector3d::Zero();
+      for (int64_t i = 0; i < c; ++i) {
+        const Eigen::Vector3d o = calibrated.candidate_offset_m[static_cast<std::size_t>(i)] / 20.0;
+        for (int j = 0; j < 3; ++j)
+          worst_h =
+              std::max(worst_h, std::abs(hypotheses[s][w][i][j].item<double>() -
+                                         (anchors.candidates[s][w][i][j].item<double>() - o[j])));
+        shift -= std::exp(log_w[s][w][i].item<double>()) * o;
+      }
+      for (int j = 0; j < 3; ++j)
+        worst_out = std::max(worst_out, std::abs(out[s][w][j].item<double>() -
+                                                 (plain_out[s][w][j].item<double>() + shift[j])));
+    }
+  CHECK(worst_h < 1e-6);
+  CHECK(worst_out < 1e-6);
+
+  // The offsets round-trip through the sidecar, which refuses a wrong count
+  // or an offset beyond kMaxCandidateOffset_m, naming the JSON pointer.
+  const std::string dir = testing::TempDir("fusion_model_offsets");
+  const std::string path = dir + "/uavloc.pt";
+  SaveUavLocModel(model, path);
+  UavLocModel loaded = LoadUavLocModel(path);
+  REQUIRE(loaded->config().candidate_offset_m.size() == static_cast<std::size_t>(c));
+  for (std::size_t i = 0; i < static_cast<std::size_t>(c); ++i)
+    CHECK(loaded->config().candidate_offset_m[i] == calibrated.candidate_offset_m[i]);
+  const std::string sidecar = testing::ReadFile(SidecarPath(path));
+  core::Json j = core::Json::parse(sidecar);
+  j["candidate_offset_m"][6][2] = 1.5;
+  testing::WriteFile(SidecarPath(path), j.dump(2));
+  CHECK_THROWS_WITH(LoadUavLocModel(path), Catch::Contains(SidecarPath(path)) &&
+                                               Catch::Contains("/candidate_offset_m/6/2"));
+  j = core::Json::parse(sidecar);
+  j["candidate_offset_m"].erase(6);
+  testing::WriteFile(SidecarPath(path), j.dump(2));
+  CHECK_THROWS_WITH(LoadUavLocModel(path), Catch::Contains(SidecarPath(path)) &&
+                                               Catch::Contains("/candidate_offset_m") &&
+                                               Catch::Contains("got 6"));
+  calibrated.candidate_offset_m.pop_back();
+  CHECK_THROWS_AS(UavLocModel(calibrated), std::invalid_argument);
 }
 
 TEST_CASE("UavLocModel anchored: invalid candidates have no influence, valid ones do",

@@ -267,6 +267,20 @@ TEST_CASE("Trainer: writes a complete model folder and an honest report", "[pipe
   CHECK(j.at("stages")[3].at("best_validation_loss").get<double>() == fusion.best_validation_loss);
   REQUIRE(j.at("test").contains("all"));
   CHECK(j.at("test").at("all").at("rmse_m").is_number());
+  // The candidates' calibrated offsets: one per candidate, each the median
+  // of offsets within the radius (so within it), in the report and the
+  // edge model's sidecar alike.
+  REQUIRE(t.report.candidate_offset_m.size() == static_cast<std::size_t>(kAnchorCandidates));
+  REQUIRE(j.at("candidate_offset_m").size() == static_cast<std::size_t>(kAnchorCandidates));
+  const core::Json sidecar = core::Json::parse(testing::ReadFile(t.dir + "/uavloc.pt.json"));
+  for (std::size_t c = 0; c < static_cast<std::size_t>(kAnchorCandidates); ++c) {
+    const Eigen::Vector3d& v = t.report.candidate_offset_m[c];
+    CHECK(v.norm() <= std::sqrt(3.0) * o.offset_calibration_radius_m);
+    for (int a = 0; a < 3; ++a) {
+      CHECK(j.at("candidate_offset_m")[c][static_cast<std::size_t>(a)].get<double>() == v[a]);
+      CHECK(sidecar.at("candidate_offset_m")[c][static_cast<std::size_t>(a)].get<double>() == v[a]);
+    }
+  }
 
   // The manifest: what it was given, with the sizes from the options.
   const ModelManifest m = ReadModelManifest(t.dir + "/model.json");

@@ -155,6 +155,8 @@ TEST_CASE("CLI: train and run refuse what they cannot use, naming it", "[sim][tr
                                               {"--selection-weight", "-1"},
                                               {"--selection-weight", "x"},
                                               {"--filter-preference", "-0.1"},
+                                              {"--offset-calibration", "-1"},
+                                              {"--offset-calibration", "1.5"},
                                               {"--plateau", "-2"},
                                               {"--position-loss", "l1"}}) {
     std::vector<std::string> args{"train", kDefault, "--out", dir + "/m"};
