@@ -14,8 +14,8 @@
 #include <memory>
 #include <string>
 
-#include "pipeline/edge_localizer.h"
-#include "pipeline/node_encoder.h"
+#include "pipeline/edge/edge_localizer.h"
+#include "pipeline/node/node_encoder.h"
 
 namespace uavsim::pipeline {
 

@@ -5,8 +5,8 @@
 #include <string>
 #include <vector>
 
-#include "pipeline/ekf_config.h"
-#include "pipeline/preprocess_config.h"
+#include "pipeline/baselines/ekf_config.h"
+#include "pipeline/node/preprocess_config.h"
 
 namespace uavsim::pipeline {
 
@@ -20,7 +20,7 @@ struct PipelineConfig {
   // modality's latents (the paper's single-modality comparison).
   std::vector<std::string> methods{"uavloc", "ekf"};
   // uavloc (anchored model) answers from its first window with a track of
-  // its anchor filter (pipeline/edge_localizer.h), as ekf from its first
+  // its anchor filter (pipeline/edge/edge_localizer.h), as ekf from its first
   // confirmed track; false: from its first window with any data (before a
   // track its range is a guess, metres off). The single-modality ablations
   // always answer from their first data.

@@ -12,11 +12,11 @@
 #include <string>
 #include <vector>
 
-#include "pipeline/edge_localizer.h"
-#include "pipeline/ib_cc_config.h"
-#include "pipeline/node_encoder.h"
-#include "pipeline/observations.h"
-#include "pipeline/te_align.h"
+#include "pipeline/edge/edge_localizer.h"
+#include "pipeline/edge/te_align.h"
+#include "pipeline/node/ib_cc_config.h"
+#include "pipeline/node/node_encoder.h"
+#include "pipeline/node/observations.h"
 #include "pipeline/torch_runtime.h"
 #include "sim/core/rng.h"
 

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "pipeline/dataset.h"
+#include "pipeline/training/dataset.h"
 #include "sim/core/json_io.h"
 #include "sim/scenario.h"
 

@@ -5,9 +5,9 @@
 #include <filesystem>
 #include <iostream>
 
-#include "pipeline/dataset_io.h"
 #include "pipeline/model_bundle.h"
 #include "pipeline/torch_runtime.h"
+#include "pipeline/training/dataset_io.h"
 #include "results/run_directory.h"
 #include "sim/core/progress.h"
 #include "sim/core/rng.h"

@@ -1,5 +1,5 @@
 // `uavsim train`: training data by simulation and the two-stage training of
-// UAVLoc (pipeline/trainer.h). Each episode is the scenario with its own
+// UAVLoc (pipeline/training/trainer.h). Each episode is the scenario with its own
 // target trajectory (orbits, figure-eights and random flights around the
 // scenario's own flight region), seed, weather (rain, fog) and uplink loss;
 // episodes are split 70/15/15 by trajectory into training, validation and
@@ -9,8 +9,8 @@
 #include <cstdint>
 #include <string>
 
-#include "pipeline/dataset.h"
-#include "pipeline/trainer.h"
+#include "pipeline/training/dataset.h"
+#include "pipeline/training/trainer.h"
 #include "sim/scenario.h"
 
 namespace uavsim::sim {
@@ -58,7 +58,7 @@ struct TrainCommand {
   double offset_calibration_radius_m = -1.0;  // < 0: TrainOptions' default; 0: none
   int plateau_epochs = -1;                    // < 0: TrainOptions' default
   std::string position_loss;                  // mixture or mean; empty: TrainOptions' default
-  double label_gate_m = 0.0;                  // stage 1 label gate (pipeline/trainer.h); 0: off
+  double label_gate_m = 0.0;  // stage 1 label gate (pipeline/training/trainer.h); 0: off
   double label_gate_deg = 0.0;
   int threads = 1;  // LibTorch intra-op threads (see NOTES.md: 1 is fastest here)
   // Episode file: read if it exists (no simulation), else written after

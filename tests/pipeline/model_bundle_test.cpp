@@ -7,11 +7,11 @@
 #include <filesystem>
 #include <string>
 
-#include "pipeline/ib_encoder.h"
-#include "pipeline/ib_model_io.h"
+#include "pipeline/edge/uavloc_model.h"
 #include "pipeline/model_bundle.h"
+#include "pipeline/node/ib_encoder.h"
+#include "pipeline/node/ib_model_io.h"
 #include "pipeline/torch_runtime.h"
-#include "pipeline/uavloc_model.h"
 #include "sim/core/error.h"
 #include "test_support.h"
 

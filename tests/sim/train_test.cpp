@@ -17,7 +17,7 @@
 
 #include "pipeline/model_bundle.h"
 #include "pipeline/torch_runtime.h"
-#include "pipeline/trainer.h"
+#include "pipeline/training/trainer.h"
 #include "results/csv.h"
 #include "sim/core/json_io.h"
 #include "sim/train.h"

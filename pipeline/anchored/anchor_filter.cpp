@@ -1,0 +1,390 @@
+#include "pipeline/anchored/anchor_filter.h"
+
+#include <Eigen/Cholesky>
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace uavsim::pipeline {
+
+namespace {
+
+// chi-square quantiles at 0.99 for 1 to 4 degrees of freedom.
+constexpr double kGate[] = {0.0, 6.635, 9.210, 11.345, 13.277};
+constexpr double kPi = 3.14159265358979323846;
+
+}  // namespace
+
+AnchorFilter::AnchorFilter(Motion motion) : motion_(motion) {
+  switch (motion) {
+    case Motion::kCv:
+      modes_ = {Mode{Model::kCv}};
+      break;
+    case Motion::kCa:
+      modes_ = {Mode{Model::kCa}};
+      break;
+    case Motion::kImm:
+      modes_ = {Mode{Model::kCt, 0.5}, Mode{Model::kCv, 0.5}};
+      break;
+  }
+}
+
+namespace {
+
+using Vector10d = Eigen::Matrix<double, 10, 1>;
+using Matrix10d = Eigen::Matrix<double, 10, 10>;
+
+// A per-axis [p, v, a] block m spread over the 10-state: m(r, c) I in
+// block (r, c); omega's row and column those of the identity (a transition)
+// or zero (a noise).
+Matrix10d PerAxis(const Eigen::Matrix3d& m, bool transition) {
+  Matrix10d big = transition ? Matrix10d(Matrix10d::Identity()) : Matrix10d(Matrix10d::Zero());
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      big.block<3, 3>(3 * r, 3 * c) = m(r, c) * Eigen::Matrix3d::Identity();
+  return big;
+}
+
+// White acceleration of spectral density q on [p, v] per axis.
+Eigen::Matrix3d WhiteAcceleration(double q, double dt) {
+  Eigen::Matrix3d m;
+  m << q * dt * dt * dt / 3.0, q * dt * dt / 2.0, 0.0,  //
+      q * dt * dt / 2.0, q * dt, 0.0,                   //
+      0.0, 0.0, 0.0;
+  return m;
+}
+
+}  // namespace
+
+// Bar-Shalom et al. Eq. 11.7.1-4 and its derivatives; their series in
+// omega dt below kSeries (where the closed forms lose digits to
+// cancellation).
+void CoordinatedTurn(const Eigen::Matrix<double, 10, 1>& x, double dt,
+                     Eigen::Matrix<double, 10, 1>& next, Eigen::Matrix<double, 10, 10>& jacobian) {
+  constexpr double kSeries = 1e-2;
+  const double vx = x(3), vy = x(4), w = x(9);
+  const double wt = w * dt, s = std::sin(wt), c = std::cos(wt);
+  double a, b, da, db;  // p_xy += [a -b; b a] v_xy; da, db their d/domega
+  if (std::abs(wt) < kSeries) {
+    const double x2 = wt * wt;
+    a = dt * (1.0 - x2 / 6.0), b = dt * wt * (0.5 - x2 / 24.0);
+    da = dt * dt * wt * (-1.0 / 3.0 + x2 / 30.0), db = dt * dt * (0.5 - x2 / 8.0);
+  } else {
+    const double half = std::sin(wt / 2.0);
+    a = s / w, b = 2.0 * half * half / w;  // (1 - cos) / w
+    da = (dt * c - a) / w, db = (dt * s - b) / w;
+  }
+  next = x;
+  next(0) = x(0) + a * vx - b * vy;
+  next(1) = x(1) + b * vx + a * vy;
+  next(2) = x(2) + dt * x(5);
+  next(3) = c * vx - s * vy;
+  next(4) = s * vx + c * vy;
+  next.segment<3>(6).setZero();
+  jacobian.setIdentity();
+  jacobian(0, 3) = a, jacobian(0, 4) = -b, jacobian(0, 9) = da * vx - db * vy;
+  jacobian(1, 3) = b, jacobian(1, 4) = a, jacobian(1, 9) = db * vx + da * vy;
+  jacobian(2, 5) = dt;
+  jacobian(3, 3) = c, jacobian(3, 4) = -s, jacobian(3, 9) = -dt * (s * vx + c * vy);
+  jacobian(4, 3) = s, jacobian(4, 4) = c, jacobian(4, 9) = dt * (c * vx - s * vy);
+  for (int i = 6; i < 9; ++i) jacobian(i, i) = 0.0;
+}
+
+namespace {
+
+// A radar fix as a position: the centroid's direction u from the radar at
+// the mean range R, with noise sigma_R^2 u u^T + (R sigma_angle)^2 (I - u u^T)
+// (its angles are degrees off, its range centimetres).
+struct RadarFix {
+  Eigen::Vector3d position, u;
+  Eigen::Matrix3d noise;
+};
+RadarFix RadarFixOf(const GeometricAnchor& a) {
+  RadarFix f;
+  f.u = (a.origin_w - a.sensor_w).normalized();
+  f.position = a.sensor_w + a.range_m * f.u;
+  const Eigen::Matrix3d along = f.u * f.u.transpose();
+  const double cross = a.range_m * AnchorFilter::kRadarAngleSigma_rad;
+  f.noise = AnchorFilter::kRangeSigma_m * AnchorFilter::kRangeSigma_m * along +
+            cross * cross * (Eigen::Matrix3d::Identity() - along);
+  return f;
+}
+
+}  // namespace
+
+void AnchorFilter::PredictTo(double t_s) {
+  const double dt = t_s - t_s_;
+  if (dt <= 0.0) return;
+  // IMM mixing (Bar-Shalom et al. Sec. 11.6.6, steps 1-2): the switch
+  // probability over dt of a Markov chain leaving a mode at 1/kModeSwitch_s.
+  const std::size_t n = modes_.size();
+  if (n > 1) {
+    const double leave = 1.0 - std::exp(-dt / kModeSwitch_s);
+    const auto pi = [&](std::size_t i, std::size_t j) {
+      return i == j ? 1.0 - leave : leave / static_cast<double>(n - 1);
+    };
+    std::vector<Mode> mixed = modes_;
+    for (std::size_t j = 0; j < n; ++j) {
+      double c = 0.0;
+      for (std::size_t i = 0; i < n; ++i) c += pi(i, j) * modes_[i].probability;
+      Vector10d x = Vector10d::Zero();
+      for (std::size_t i = 0; i < n; ++i) x += pi(i, j) * modes_[i].probability / c * modes_[i].x;
+      Matrix10d p = Matrix10d::Zero();
+      for (std::size_t i = 0; i < n; ++i) {
+        const Vector10d d = modes_[i].x - x;
+        p += pi(i, j) * modes_[i].probability / c * (modes_[i].p + d * d.transpose());
+      }
+      mixed[j].probability = c, mixed[j].x = x, mixed[j].p = p;
+    }
+    modes_ = std::move(mixed);
+  }
+  for (Mode& mode : modes_) {
+    Matrix10d f, q;
+    Vector10d next;
+    if (mode.model == Model::kCt) {
+      CoordinatedTurn(mode.x, dt, next, f);
+      q = PerAxis(WhiteAcceleration(kTurnAccelPsd, dt), false);
+      q(9, 9) = kTurnRatePsd * dt;
+    } else {
+      Eigen::Matrix3d f3 = Eigen::Matrix3d::Identity(), q3;
+      f3(0, 1) = dt;
+      if (mode.model == Model::kCv) {
+        f3(2, 2) = 0.0;  // a stays 0
+        q3 = WhiteAcceleration(kAccelPsd, dt);
+      } else {
+        f3(1, 2) = dt, f3(0, 2) = dt * dt / 2.0;
+        const double d2 = dt * dt, d3 = d2 * dt, d4 = d3 * dt, d5 = d4 * dt, j = kJerkPsd;
+        q3 << j * d5 / 20.0, j * d4 / 8.0, j * d3 / 6.0,  //
+            j * d4 / 8.0, j * d3 / 3.0, j * d2 / 2.0,     //
+            j * d3 / 6.0, j * d2 / 2.0, j * dt;
+      }
+      f = PerAxis(f3, true);
+      q = PerAxis(q3, false);
+      next = f * mode.x;
+    }
+    mode.x = next;
+    mode.p = f * mode.p * f.transpose() + q;
+  }
+  t_s_ = t_s;
+  Combine();
+}
+
+void AnchorFilter::Combine() {
+  x_.setZero();
+  for (const Mode& mode : modes_) x_ += mode.probability * mode.x;
+  p_.setZero();
+  for (const Mode& mode : modes_) {
+    const Vector10d d = mode.x - x_;
+    p_ += mode.probability * (mode.p + d * d.transpose());
+  }
+}
+
+template <int N, class Measure>
+bool AnchorFilter::Update(const Measure& measure, const Eigen::Matrix<double, N, N>& noise) {
+  using VectorN = Eigen::Matrix<double, N, 1>;
+  using MatrixN = Eigen::Matrix<double, N, N>;
+  {
+    const auto [innovation, h] = measure(x_);
+    const Eigen::LLT<MatrixN> llt(h * p_ * h.transpose() + noise);
+    if (llt.info() != Eigen::Success) return false;
+    if (innovation.dot(llt.solve(innovation)) > kGate[N]) return false;
+  }
+  // Each mode's Kalman update (Joseph form) and its log-likelihood (IMM
+  // step 4): -d^2/2 - log det(2 pi S)/2. Committed once every mode's is.
+  std::vector<Mode> updated = modes_;
+  std::vector<double> log_likelihood(modes_.size());
+  for (std::size_t j = 0; j < modes_.size(); ++j) {
+    Mode& mode = updated[j];
+    const auto [innovation, h] = measure(mode.x);
+    const Eigen::LLT<MatrixN> llt(h * mode.p * h.transpose() + noise);
+    if (llt.info() != Eigen::Success) return false;
+    const VectorN solved = llt.solve(innovation);
+    const Eigen::Matrix<double, 10, N> k = llt.solve(h * mode.p).transpose();  // P H^T S^-1
+    mode.x += k * innovation;
+    const Matrix10d a = Matrix10d::Identity() - k * h;
+    mode.p = a * mode.p * a.transpose() + k * noise * k.transpose();
+    const MatrixN l = llt.matrixL();
+    log_likelihood[j] = -0.5 * innovation.dot(solved) - l.diagonal().array().log().sum() -
+                        0.5 * N * std::log(2.0 * kPi);
+  }
+  modes_ = std::move(updated);
+  // The modes' probabilities (IMM step 5), normalised from the largest.
+  const double top = *std::max_element(log_likelihood.begin(), log_likelihood.end());
+  double total = 0.0;
+  for (std::size_t j = 0; j < modes_.size(); ++j)
+    total += modes_[j].probability *= std::exp(log_likelihood[j] - top);
+  if (total > 0.0)
+    for (Mode& mode : modes_) mode.probability /= total;
+  Combine();
+  return true;
+}
+
+void AnchorFilter::Start(const Eigen::Vector3d& p, double t_s, const GeometricAnchor* radar) {
+  started_ = true;
+  t_s_ = last_ranging_s_ = t_s;
+  rejections_ = lidar_rejections_ = 0;
+  // At a LiDAR fix on the ray, known to sigma_lidar; at a radar's fix, known
+  // as the radar knows it (the ray it agreed with may be up to
+  // RayGate::kGateMaxAge_s old: the following rays fix the rest). The
+  // velocity: unknown, but along a starting radar's line of sight u its
+  // radial velocity.
+  Eigen::Vector3d start = p;
+  Eigen::Matrix3d p_cov = kLidarSigma_m * kLidarSigma_m * Eigen::Matrix3d::Identity();
+  Eigen::Vector3d v = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d v_cov = kStartSpeedSigma_mps * kStartSpeedSigma_mps * Eigen::Matrix3d::Identity();
+  if (radar) {
+    const RadarFix fix = RadarFixOf(*radar);
+    start = fix.position;
+    p_cov = fix.noise;
+  }
+  if (radar && radar->has_range_rate) {
+    const Eigen::Vector3d u = (p - radar->sensor_w).normalized();
+    const Eigen::Matrix3d along = u * u.transpose();
+    v = radar->range_rate_mps * u;
+    v_cov = v_cov * (Eigen::Matrix3d::Identity() - along) +
+            kRangeRateSigma_mps * kRangeRateSigma_mps * along;
+  }
+  for (Mode& mode : modes_) {
+    mode.probability = 1.0 / static_cast<double>(modes_.size());
+    mode.x.setZero();
+    mode.x.head<3>() = start;
+    mode.x.segment<3>(3) = v;
+    mode.p.setZero();
+    mode.p.topLeftCorner<3, 3>() = p_cov;
+    mode.p.block<3, 3>(3, 3) = v_cov;
+    if (motion_ == Motion::kCa)
+      mode.p.diagonal().segment<3>(6).setConstant(kStartAccelSigma_mps2 * kStartAccelSigma_mps2);
+    if (motion_ == Motion::kImm) mode.p(9, 9) = kStartTurnSigma_rps * kStartTurnSigma_rps;
+  }
+  Combine();
+}
+
+std::optional<double> AnchorFilter::TurnProbability() const {
+  if (!started_) return std::nullopt;
+  double p = 0.0;
+  for (const Mode& mode : modes_)
+    if (mode.model == Model::kCt) p += mode.probability;
+  return p;
+}
+
+bool AnchorFilter::AgreesWithRay(Modality m, const GeometricAnchor& a) const {
+  return ray_ && AnchorAgreesWithRay(m, a, *ray_);
+}
+
+void AnchorFilter::Observe(Modality m, const GeometricAnchor& a) {
+  if (a.kind == GeometricAnchor::Kind::kNone) return;
+  const bool is_ray = a.kind == GeometricAnchor::Kind::kRay;
+  if (is_ray != (m == Modality::kCamera))
+    throw std::invalid_argument("AnchorFilter: a camera anchor must be a ray, others points");
+  // Coasting past kMaxCoast_s the track still predicts, but any ranging fix
+  // that agrees with the ray may take it over.
+  const bool live = started_ && a.t_s - last_ranging_s_ <= kMaxCoast_s;
+  if (is_ray) {
+    ray_ = a;
+    if (!started_) return;
+    PredictTo(a.t_s);
+    // An orthonormal pair normal to the ray.
+    const Eigen::Vector3d& d = a.direction_w;
+    const Eigen::Vector3d e1 = d.unitOrthogonal();
+    const Eigen::Vector3d e2 = d.cross(e1);
+    const double rho = std::max(1.0, (x_.head<3>() - a.origin_w).dot(d));
+    const double var = std::pow(rho * kRaySigma_rad, 2) + kRayFloor_m * kRayFloor_m;
+    Update<2>(
+        [&](const Vector10d& x) {
+          const Eigen::Vector3d r = x.head<3>() - a.origin_w;
+          Eigen::Matrix<double, 2, 10> h = Eigen::Matrix<double, 2, 10>::Zero();
+          h.block<1, 3>(0, 0) = e1.transpose();
+          h.block<1, 3>(1, 0) = e2.transpose();
+          return std::pair{Eigen::Vector2d(-e1.dot(r), -e2.dot(r)), h};
+        },
+        Eigen::Matrix2d(var * Eigen::Matrix2d::Identity()));
+    return;
+  }
+  bool accepted = false;
+  if (started_) {
+    PredictTo(a.t_s);
+    // A position measurement z_p: innovation z_p - p, Jacobian [I 0].
+    const auto position = [](const Eigen::Vector3d& z_p) {
+      return [z_p](const Vector10d& x) {
+        Eigen::Matrix<double, 3, 10> h = Eigen::Matrix<double, 3, 10>::Zero();
+        h.leftCols<3>().setIdentity();
+        return std::pair{Eigen::Vector3d(z_p - x.head<3>()), h};
+      };
+    };
+    if (m == Modality::kLidar) {
+      accepted = Update<3>(position(a.origin_w), Eigen::Matrix3d(kLidarSigma_m * kLidarSigma_m *
+                                                                 Eigen::Matrix3d::Identity()));
+    } else {
+      // The cluster's position (RadarFixOf) and its radial velocity (u . v
+      // at the predicted position).
+      const RadarFix fix = RadarFixOf(a);
+      const Eigen::Matrix3d& position_noise = fix.noise;
+      const Eigen::Vector3d& z_p = fix.position;
+      if (a.has_range_rate) {
+        Eigen::Matrix4d noise = Eigen::Matrix4d::Zero();
+        noise.topLeftCorner<3, 3>() = position_noise;
+        noise(3, 3) = kRangeRateSigma_mps * kRangeRateSigma_mps;
+        accepted = Update<4>(
+            [&](const Vector10d& x) {
+              const Eigen::Vector3d r = x.head<3>() - a.sensor_w;
+              const double range = std::max(r.norm(), 1e-3);
+              const Eigen::Vector3d los = r / range;
+              const Eigen::Vector3d v = x.segment<3>(3);
+              Eigen::Matrix<double, 4, 10> h = Eigen::Matrix<double, 4, 10>::Zero();
+              h.topLeftCorner<3, 3>().setIdentity();
+              h.block<1, 3>(3, 0) = ((v - los.dot(v) * los) / range).transpose();  // d(los . v)/dp
+              h.block<1, 3>(3, 3) = los.transpose();
+              Eigen::Vector4d innovation;
+              innovation << z_p - x.head<3>(), a.range_rate_mps - los.dot(v);
+              return std::pair{innovation, h};
+            },
+            noise);
+      } else {
+        accepted = Update<3>(position(z_p), position_noise);
+      }
+    }
+    if (m == Modality::kLidar) lidar_rejections_ = accepted ? 0 : lidar_rejections_ + 1;
+    if (accepted) {
+      last_ranging_s_ = t_s_;
+      rejections_ = 0;
+      pending_.reset();
+      return;
+    }
+    ++rejections_;
+  }
+  // A (re)start at a ranging fix that agrees with the ray: a LiDAR fix the
+  // track rejected means the track is wrong. A radar's cluster is often
+  // something else on the same line of sight, and a static one confirms
+  // itself frame after frame: a radar fix starts a track only where none
+  // runs, once a second fix (at the ray's crossing of its range sphere)
+  // confirms it, and never takes one over.
+  if ((live && rejections_ < kMaxRejections && lidar_rejections_ < kMaxLidarRejections) ||
+      !AgreesWithRay(m, a))
+    return;
+  const Eigen::Vector3d& o = ray_->origin_w;
+  const Eigen::Vector3d& d = ray_->direction_w;
+  // The ray crosses the radar's range sphere twice: the crossing nearer the
+  // pending fix, or (none) the centroid.
+  const Eigen::Vector3d& hint = pending_ ? pending_->first : a.origin_w;
+  const Eigen::Vector3d p =
+      m == Modality::kLidar ? a.origin_w : RangeOnRay(a.sensor_w, a.range_m, hint, o, d);
+  const bool confirmed = pending_ && (p - pending_->first).norm() <=
+                                         kConfirm_m + kMaxSpeed_mps * (a.t_s - pending_->second);
+  if (m == Modality::kLidar || (confirmed && !live)) {
+    Start(p, std::max(a.t_s, ray_->t_s), m == Modality::kRadar ? &a : nullptr);
+    pending_.reset();
+  } else {
+    pending_ = std::pair{p, a.t_s};
+  }
+}
+
+std::optional<AnchorFilter::Estimate> AnchorFilter::PredictAt(double t_s) const {
+  if (!started_ || t_s - last_ranging_s_ > kMaxPredict_s) return std::nullopt;
+  AnchorFilter copy = *this;
+  copy.PredictTo(t_s);
+  return Estimate{copy.x_.head<3>(), std::sqrt(copy.p_.topLeftCorner<3, 3>().trace()),
+                  std::max(0.0, t_s - last_ranging_s_)};
+}
+
+}  // namespace uavsim::pipeline

@@ -1,0 +1,27 @@
+#include "pipeline/node/ib_cc_config.h"
+
+#include <string>
+
+#include "sim/core/json_io.h"
+
+namespace uavsim::pipeline {
+
+using core::Rule;
+
+template <class V>
+void Visit(V& v, IbCcConfig& c) {
+  v.Enum("modality", c.modality,
+         {{"camera", Modality::kCamera}, {"lidar", Modality::kLidar}, {"radar", Modality::kRadar}});
+  v("latent_dim", c.latent_dim, Rule::Range(1, 4096));
+  v.Check(c.latent_dim == 4 || c.latent_dim == 8 || c.latent_dim == 16 || c.latent_dim == 32 ||
+              c.latent_dim == 64,
+          "latent_dim",
+          "expected one of 4, 8, 16, 32, 64 (paper Sec. VI), got " + std::to_string(c.latent_dim));
+  v.Enum("bottleneck", c.bottleneck, {{"ib", IbBottleneck::kIb}, {"mlp", IbBottleneck::kMlp}});
+  v("dropout", c.dropout, Rule{0.0, 1.0, false, true});
+  v("beta", c.beta, Rule::NonNegative());
+  v.Object("normalization", c.normalization);
+}
+UAVSIM_INSTANTIATE_VISIT(IbCcConfig);
+
+}  // namespace uavsim::pipeline

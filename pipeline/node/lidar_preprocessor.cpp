@@ -1,0 +1,147 @@
+#include "pipeline/node/lidar_preprocessor.h"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "pipeline/node/point_clustering.h"
+
+namespace uavsim::pipeline {
+namespace {
+
+// 21 bits per axis: +-2^20 voxels, +-524 km at 0.5 m, far beyond any
+// sensor's range; coordinates past it are clamped (and never static).
+constexpr int kAxisBits = 21;
+constexpr std::int64_t kAxisOffset = std::int64_t{1} << (kAxisBits - 1);
+constexpr std::int64_t kAxisMax = (std::int64_t{1} << kAxisBits) - 1;
+
+std::uint64_t Pack(std::int64_t v) {
+  v += kAxisOffset;
+  if (v < 0) v = 0;
+  if (v > kAxisMax) v = kAxisMax;
+  return static_cast<std::uint64_t>(v);
+}
+
+}  // namespace
+
+LidarPreprocessor::LidarPreprocessor(const sensors::LidarConfig& sensor,
+                                     const PreprocessConfig& config)
+    : config_(config.lidar), raw_(config.LidarRaw()), sensor_position_w_(sensor.pose.position_m) {}
+
+void LidarPreprocessor::Reset() {
+  frames_seen_ = 0;
+  occupancy_.clear();
+  static_voxels_.clear();
+}
+
+std::uint64_t LidarPreprocessor::VoxelKey(int ix, int iy, int iz) const {
+  return (Pack(ix) << (2 * kAxisBits)) | (Pack(iy) << kAxisBits) | Pack(iz);
+}
+
+bool LidarPreprocessor::VoxelOf(const sensors::LidarPoint& p, int& ix, int& iy, int& iz) const {
+  if (!std::isfinite(p.x_m) || !std::isfinite(p.y_m) || !std::isfinite(p.z_m)) return false;
+  const double inv = 1.0 / config_.voxel_size_m;
+  // Clamp before the int conversion: a wild coordinate must not overflow.
+  auto cell = [&](float c) {
+    const double k = std::floor(c * inv);
+    return static_cast<int>(std::clamp(k, -2.0 * kAxisOffset, 2.0 * kAxisOffset));
+  };
+  ix = cell(p.x_m);
+  iy = cell(p.y_m);
+  iz = cell(p.z_m);
+  return true;
+}
+
+void LidarPreprocessor::Learn(const sensors::PointCloudFrame& frame) {
+  for (const sensors::LidarPoint& p : frame.points) {
+    int ix, iy, iz;
+    if (!VoxelOf(p, ix, iy, iz)) continue;
+    Occupancy& o = occupancy_[VoxelKey(ix, iy, iz)];
+    if (o.last_frame == frames_seen_) continue;
+    o.last_frame = frames_seen_;
+    ++o.frames;
+  }
+}
+
+bool LidarPreprocessor::IsStatic(const sensors::LidarPoint& p) const {
+  int ix, iy, iz;
+  if (!VoxelOf(p, ix, iy, iz)) return true;
+  if (static_voxels_.count(VoxelKey(ix, iy, iz))) return true;
+  if (!config_.static_neighbourhood) return false;
+  // Only the few non-static points get here, so the 26 look-ups stay cheap.
+  // They absorb range noise that moves a surface's return across a voxel
+  // face, and the sparse coverage of non-repetitive (rosette) scans.
+  for (int dz = -1; dz <= 1; ++dz)
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx)
+        if (static_voxels_.count(VoxelKey(ix + dx, iy + dy, iz + dz))) return true;
+  return false;
+}
+
+PointObservation LidarPreprocessor::Process(const sensors::PointCloudFrame& frame) {
+  PointObservation obs;
+  obs.t_s = frame.t_start_s;
+  obs.channels = 4;
+  obs.sensor_position_w = sensor_position_w_;
+
+  std::vector<std::size_t> kept;  // indices into frame.points, increasing
+  if (raw_) {
+    kept.reserve(frame.points.size());
+    for (std::size_t i = 0; i < frame.points.size(); ++i) {
+      const auto& p = frame.points[i];
+      if (std::isfinite(p.x_m) && std::isfinite(p.y_m) && std::isfinite(p.z_m)) kept.push_back(i);
+    }
+    ++frames_seen_;
+  } else if (!warmed_up()) {
+    Learn(frame);
+    ++frames_seen_;
+    if (warmed_up()) {
+      const auto n = static_cast<double>(config_.warmup_frames);
+      // The smallest whole number of scans that reaches the fraction.
+      const auto min_frames = static_cast<std::uint32_t>(
+          std::max(1.0, std::ceil(config_.occupancy_threshold * n - 1e-9)));
+      for (const auto& [key, o] : occupancy_)
+        if (o.frames >= min_frames) static_voxels_.insert(key);
+      occupancy_.clear();
+      occupancy_.rehash(0);
+    }
+    return obs;
+  } else {
+    std::vector<std::size_t> dynamic;
+    for (std::size_t i = 0; i < frame.points.size(); ++i)
+      if (!IsStatic(frame.points[i])) dynamic.push_back(i);
+    if (config_.clusters_kept == 0) {
+      kept = std::move(dynamic);
+    } else {
+      std::vector<float> xyz;
+      xyz.reserve(3 * dynamic.size());
+      for (std::size_t i : dynamic) {
+        const auto& p = frame.points[i];
+        xyz.insert(xyz.end(), {p.x_m, p.y_m, p.z_m});
+      }
+      const DbscanClusters clusters =
+          Dbscan(xyz, 3, config_.cluster_eps_m, config_.cluster_min_points);
+      std::vector<char> keep_cluster(clusters.size.size(), 0);
+      for (int id : LargestClusters(clusters, config_.clusters_kept)) keep_cluster[id] = 1;
+      for (std::size_t k = 0; k < dynamic.size(); ++k) {
+        const int id = clusters.label[k];
+        if (id != DbscanClusters::kNoise && keep_cluster[id]) kept.push_back(dynamic[k]);
+      }
+    }
+    ++frames_seen_;
+  }
+
+  const std::vector<std::size_t> pick =
+      EvenlySpacedIndices(kept.size(), PointObservation::kMaxPoints);
+  obs.values.reserve(4 * pick.size());
+  double offset_sum_s = 0.0;
+  for (std::size_t k : pick) {
+    const sensors::LidarPoint& p = frame.points[kept[k]];
+    obs.values.insert(obs.values.end(), {p.x_m, p.y_m, p.z_m, p.intensity});
+    offset_sum_s += p.t_offset_s;
+  }
+  if (!pick.empty()) obs.t_s += offset_sum_s / static_cast<double>(pick.size());
+  return obs;
+}
+
+}  // namespace uavsim::pipeline

@@ -1,0 +1,76 @@
+// The LiDAR sensing node's pre-processing (paper Sec. IV-A, "the point cloud
+// of the target is simply obtained by subtracting the static background
+// from each LiDAR scan"):
+//
+//   warm-up   the first lidar.warmup_frames scans build a static background:
+//             a voxel (edge voxel_size_m, world frame) is static if it holds
+//             a return in at least occupancy_threshold of those scans.
+//             Nothing is reported meanwhile (empty observations).
+//   per scan  a point is dynamic unless its voxel (or, with
+//             static_neighbourhood, one of the 26 around it) is static;
+//             DBSCAN (cluster_eps_m, cluster_min_points) of the dynamic
+//             points, the clusters_kept largest kept (0: every dynamic point).
+//   raw       (config.LidarRaw()) no background, no clustering, from the
+//             first scan on.
+// Either way at most PointObservation::kMaxPoints points, evenly spaced in
+// the frame's order if there are more (EvenlySpacedIndices), in the frame's
+// order. Channels 4: x, y, z (world, metres), intensity.
+//
+// The observation's t_s is the frame's t_start_s plus the mean t_offset_s of
+// the kept points (when the target was swept), or t_start_s if none is kept.
+// sensor_position_w is the LiDAR's pose position.
+//
+// The background is learnt once and then frozen: whatever reaches the
+// occupancy threshold during warm-up is background for good. With the
+// default threshold (one hit in 20 scans, for the rosette's sparse
+// coverage) that includes the target's own returns during warm-up: its
+// points are lost wherever it passes within a voxel of them again. Points with
+// non-finite coordinates are ignored. Deterministic: the output is a pure
+// function of the frames seen since construction (or Reset). Cost: about
+// 1 ms for a 19k-point scan on one x86 core.
+#pragma once
+
+#include <cstdint>
+#include <unordered_map>
+#include <unordered_set>
+
+#include "pipeline/node/observations.h"
+#include "pipeline/node/preprocess_config.h"
+#include "sensors/frames.h"
+#include "sensors/lidar_config.h"
+
+namespace uavsim::pipeline {
+
+class LidarPreprocessor {
+ public:
+  LidarPreprocessor(const sensors::LidarConfig& sensor, const PreprocessConfig& config);
+
+  PointObservation Process(const sensors::PointCloudFrame& frame);
+
+  // Forgets the background and the frame count.
+  void Reset();
+
+  bool warmed_up() const { return frames_seen_ >= config_.warmup_frames; }
+  int frames_seen() const { return frames_seen_; }
+  std::size_t static_voxel_count() const { return static_voxels_.size(); }
+
+ private:
+  struct Occupancy {
+    std::uint32_t frames = 0;      // warm-up scans that hit this voxel
+    std::int32_t last_frame = -1;  // so a scan counts once per voxel
+  };
+
+  std::uint64_t VoxelKey(int ix, int iy, int iz) const;
+  bool VoxelOf(const sensors::LidarPoint& p, int& ix, int& iy, int& iz) const;
+  bool IsStatic(const sensors::LidarPoint& p) const;
+  void Learn(const sensors::PointCloudFrame& frame);
+
+  LidarPreprocessConfig config_;
+  bool raw_;
+  Eigen::Vector3d sensor_position_w_;
+  int frames_seen_ = 0;
+  std::unordered_map<std::uint64_t, Occupancy> occupancy_;  // during warm-up only
+  std::unordered_set<std::uint64_t> static_voxels_;
+};
+
+}  // namespace uavsim::pipeline

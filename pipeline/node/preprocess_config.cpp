@@ -1,0 +1,63 @@
+#include "pipeline/node/preprocess_config.h"
+
+#include "sim/core/json_io.h"
+
+namespace uavsim::pipeline {
+
+using core::Rule;
+
+template <class V>
+void Visit(V& v, CameraPreprocessConfig& c) {
+  v("raw", c.raw);
+  v("rectified_width_px", c.rectified_width_px, Rule::Range(16, 8192));
+  v("rectified_height_px", c.rectified_height_px, Rule::Range(16, 8192));
+  v("rectified_focal_px", c.rectified_focal_px, Rule::Positive(1e5));
+  v("warmup_frames", c.warmup_frames, Rule::Range(0, 100000));
+  v("mog2_history_frames", c.mog2_history_frames, Rule::Range(1, 100000));
+  v("mog2_var_threshold", c.mog2_var_threshold, Rule::Positive(1e4));
+  v("morphology_kernel_px", c.morphology_kernel_px, Rule::Range(1, 31));
+  v("min_blob_area_px", c.min_blob_area_px, Rule::Range(1, 1000000));
+  v("gate_px", c.gate_px, Rule::NonNegative(1e5));
+  v("gate_max_age_frames", c.gate_max_age_frames, Rule::Range(1, 100000));
+  v("roi_margin", c.roi_margin, Rule::Range(1.0, 100.0));
+  v("min_roi_side_px", c.min_roi_side_px, Rule::Range(4.0, 8192.0));
+  v("stereo_min_range_m", c.stereo_min_range_m, Rule::Positive(1e5));
+  v("ncc_min", c.ncc_min, Rule::Range(-1.0, 1.0));
+  v("epipolar_slack_px", c.epipolar_slack_px, Rule::Range(0, 64));
+}
+
+template <class V>
+void Visit(V& v, LidarPreprocessConfig& c) {
+  v("raw", c.raw);
+  v("voxel_size_m", c.voxel_size_m, Rule::Range(0.01, 100.0));
+  v("warmup_frames", c.warmup_frames, Rule::Range(1, 100000));
+  v("occupancy_threshold", c.occupancy_threshold, Rule{0.0, 1.0, true, false});
+  v("static_neighbourhood", c.static_neighbourhood);
+  v("cluster_eps_m", c.cluster_eps_m, Rule::Positive(1000.0));
+  v("cluster_min_points", c.cluster_min_points, Rule::Range(1, 100000));
+  v("clusters_kept", c.clusters_kept, Rule::Range(0, 1000));
+}
+
+template <class V>
+void Visit(V& v, RadarPreprocessConfig& c) {
+  v("raw", c.raw);
+  v("cluster_eps_m", c.cluster_eps_m, Rule::Positive(1000.0));
+  v("cluster_min_points", c.cluster_min_points, Rule::Range(1, 100000));
+  v("velocity_weight_s", c.velocity_weight_s, Rule::NonNegative(1000.0));
+  v("clusters_kept", c.clusters_kept, Rule::Range(0, 1000));
+}
+
+template <class V>
+void Visit(V& v, PreprocessConfig& c) {
+  v("raw", c.raw);
+  v.Object("camera", c.camera);
+  v.Object("lidar", c.lidar);
+  v.Object("radar", c.radar);
+}
+
+UAVSIM_INSTANTIATE_VISIT(CameraPreprocessConfig);
+UAVSIM_INSTANTIATE_VISIT(LidarPreprocessConfig);
+UAVSIM_INSTANTIATE_VISIT(RadarPreprocessConfig);
+UAVSIM_INSTANTIATE_VISIT(PreprocessConfig);
+
+}  // namespace uavsim::pipeline

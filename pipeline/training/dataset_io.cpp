@@ -1,0 +1,227 @@
+#include "pipeline/training/dataset_io.h"
+
+#include <unistd.h>
+
+#include <opencv2/core.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+#include <type_traits>
+
+namespace uavsim::pipeline {
+namespace {
+
+constexpr char kMagic[8] = {'U', 'A', 'V', 'E', 'P', 'S', '0', '1'};
+constexpr std::uint64_t kMaxCount = 1ull << 32;
+
+class Writer {
+ public:
+  explicit Writer(std::ofstream& out) : out_(out) {}
+  template <class T>
+  void Pod(const T& v) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    out_.write(reinterpret_cast<const char*>(&v), sizeof v);
+  }
+  void Vec3(const Eigen::Vector3d& v) { Pod(v.x()), Pod(v.y()), Pod(v.z()); }
+  void String(const std::string& s) {
+    Pod<std::uint64_t>(s.size());
+    out_.write(s.data(), static_cast<std::streamsize>(s.size()));
+  }
+  void Floats(const std::vector<float>& v) {
+    Pod<std::uint64_t>(v.size());
+    out_.write(reinterpret_cast<const char*>(v.data()),
+               static_cast<std::streamsize>(v.size() * sizeof(float)));
+  }
+  // Grey values k / 255 as the bytes k.
+  void Grey(const std::vector<float>& v) {
+    std::vector<std::uint8_t> b(v.size());
+    for (std::size_t i = 0; i < v.size(); ++i)
+      b[i] = static_cast<std::uint8_t>(std::lround(std::clamp(v[i], 0.0f, 1.0f) * 255.0f));
+    Pod<std::uint64_t>(b.size());
+    out_.write(reinterpret_cast<const char*>(b.data()), static_cast<std::streamsize>(b.size()));
+  }
+
+ private:
+  std::ofstream& out_;
+};
+
+class Reader {
+ public:
+  Reader(std::ifstream& in, std::string path, std::uint64_t size)
+      : in_(in), path_(std::move(path)), size_(size) {}
+  template <class T>
+  T Pod() {
+    T v{};
+    in_.read(reinterpret_cast<char*>(&v), sizeof v);
+    if (!in_) Fail("truncated");
+    return v;
+  }
+  // A count of items of at least `item_bytes` each: refused when the rest
+  // of the file cannot hold them (before anything is allocated).
+  std::uint64_t Count(std::uint64_t item_bytes) {
+    const auto n = Pod<std::uint64_t>();
+    const auto left = size_ - static_cast<std::uint64_t>(in_.tellg());
+    if (n > kMaxCount || n * item_bytes > left)
+      Fail("corrupt (a count of " + std::to_string(n) + ")");
+    return n;
+  }
+  Eigen::Vector3d Vec3() {
+    const double x = Pod<double>(), y = Pod<double>(), z = Pod<double>();
+    return {x, y, z};
+  }
+  std::string String() {
+    std::string s(Count(1), '\0');
+    in_.read(s.data(), static_cast<std::streamsize>(s.size()));
+    if (!in_) Fail("truncated");
+    return s;
+  }
+  std::vector<float> Floats() {
+    std::vector<float> v(Count(4));
+    in_.read(reinterpret_cast<char*>(v.data()), static_cast<std::streamsize>(v.size() * 4));
+    if (!in_) Fail("truncated");
+    return v;
+  }
+  std::vector<float> Grey() {
+    std::vector<std::uint8_t> b(Count(1));
+    in_.read(reinterpret_cast<char*>(b.data()), static_cast<std::streamsize>(b.size()));
+    if (!in_) Fail("truncated");
+    // The same conversion as the camera pre-processor's (OpenCV's), so a
+    // crop read back is bit for bit the crop that was simulated.
+    cv::Mat f;
+    cv::Mat(1, static_cast<int>(b.size()), CV_8UC1, b.data()).convertTo(f, CV_32F, 1.0 / 255.0);
+    return std::vector<float>(f.ptr<float>(), f.ptr<float>() + f.total());
+  }
+  [[noreturn]] void Fail(const std::string& what) const {
+    throw std::runtime_error(path_ + ": " + what + " (not an episode file of this uavsim?)");
+  }
+
+ private:
+  std::ifstream& in_;
+  std::string path_;
+  std::uint64_t size_;
+};
+
+}  // namespace
+
+void WriteEpisodes(const std::vector<Episode>& episodes, const std::string& path) {
+  for (const Episode& e : episodes)
+    for (const Sample& s : e.samples)
+      if ((s.modality == Modality::kCamera) != s.camera.has_value() ||
+          (s.modality != Modality::kCamera) != s.points.has_value())
+        throw std::invalid_argument(path + ": a " + ModalityName(s.modality) +
+                                    " sample must carry exactly its own observation");
+  const std::string tmp = path + ".tmp-" + std::to_string(::getpid());
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    Writer w(out);
+    out.write(kMagic, sizeof kMagic);
+    w.Pod<std::uint64_t>(episodes.size());
+    for (const Episode& e : episodes) {
+      w.String(e.label);
+      w.Pod(e.window_s);
+      w.Pod<std::uint64_t>(e.window_truth.size());
+      for (const auto& p : e.window_truth) w.Vec3(p);
+      w.Pod<std::uint64_t>(e.samples.size());
+      for (const Sample& s : e.samples) {
+        w.Pod<std::uint8_t>(static_cast<std::uint8_t>(s.modality));
+        w.Pod(s.node);
+        w.Pod(s.t_s);
+        w.Pod<std::uint8_t>(s.on_time);
+        w.Vec3(s.truth_m);
+        w.Pod<std::uint8_t>(s.camera ? 1 : 2);
+        if (const auto& c = s.camera) {
+          w.Pod(c->t_s);
+          w.Pod<std::uint8_t>(c->detected);
+          w.Grey(c->crop_left);
+          w.Grey(c->crop_right);
+          for (float f : {c->centre_left_px.x(), c->centre_left_px.y(), c->centre_right_px.x(),
+                          c->centre_right_px.y(), c->side_left_px, c->side_right_px})
+            w.Pod(f);
+          for (const auto* v :
+               {&c->eye_left_w, &c->eye_right_w, &c->bearing_left_w, &c->bearing_right_w})
+            w.Vec3(*v);
+        } else {
+          const PointObservation& p = *s.points;
+          w.Pod(p.t_s);
+          w.Pod<std::int32_t>(p.channels);
+          w.Floats(p.values);
+          w.Vec3(p.sensor_position_w);
+        }
+      }
+    }
+    out.close();
+    if (!out) {
+      std::filesystem::remove(tmp);
+      throw std::runtime_error(path + ": cannot write");
+    }
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) throw std::runtime_error(path + ": cannot write: " + ec.message());
+}
+
+std::vector<Episode> ReadEpisodes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error(path + ": cannot open");
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(path, ec);
+  if (ec) throw std::runtime_error(path + ": cannot open: " + ec.message());
+  Reader r(in, path, size);
+  char magic[sizeof kMagic];
+  in.read(magic, sizeof magic);
+  if (!in || std::memcmp(magic, kMagic, sizeof kMagic) != 0) r.Fail("not an episode file");
+  std::vector<Episode> episodes(r.Count(8));
+  for (Episode& e : episodes) {
+    e.label = r.String();
+    e.window_s = r.Pod<double>();
+    e.window_truth.resize(r.Count(24));
+    for (auto& p : e.window_truth) p = r.Vec3();
+    e.samples.resize(r.Count(50));
+    for (Sample& s : e.samples) {
+      const auto m = r.Pod<std::uint8_t>();
+      if (m >= kModalityCount) r.Fail("corrupt (modality " + std::to_string(m) + ")");
+      s.modality = static_cast<Modality>(m);
+      s.node = r.Pod<std::uint32_t>();
+      s.t_s = r.Pod<double>();
+      s.on_time = r.Pod<std::uint8_t>() != 0;
+      s.truth_m = r.Vec3();
+      const auto kind = r.Pod<std::uint8_t>();
+      if ((kind == 1) != (s.modality == Modality::kCamera))
+        r.Fail("corrupt (a " + std::string(ModalityName(s.modality)) +
+               " sample of the wrong kind)");
+      if (kind == 1) {
+        CameraObservation c;
+        c.t_s = r.Pod<double>();
+        c.detected = r.Pod<std::uint8_t>() != 0;
+        c.crop_left = r.Grey();
+        c.crop_right = r.Grey();
+        float g[6];
+        for (float& f : g) f = r.Pod<float>();
+        c.centre_left_px = {g[0], g[1]};
+        c.centre_right_px = {g[2], g[3]};
+        c.side_left_px = g[4];
+        c.side_right_px = g[5];
+        for (auto* v : {&c.eye_left_w, &c.eye_right_w, &c.bearing_left_w, &c.bearing_right_w})
+          *v = r.Vec3();
+        s.camera = std::move(c);
+      } else if (kind == 2) {
+        PointObservation p;
+        p.t_s = r.Pod<double>();
+        p.channels = r.Pod<std::int32_t>();
+        p.values = r.Floats();
+        p.sensor_position_w = r.Vec3();
+        s.points = std::move(p);
+      } else {
+        r.Fail("corrupt (sample kind " + std::to_string(kind) + ")");
+      }
+    }
+  }
+  return episodes;
+}
+
+}  // namespace uavsim::pipeline

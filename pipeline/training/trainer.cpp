@@ -1,0 +1,716 @@
+#include "pipeline/training/trainer.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <stdexcept>
+
+#include "pipeline/edge/te_align.h"
+#include "pipeline/edge/uavloc_model.h"
+#include "pipeline/node/ib_encoder.h"
+#include "pipeline/node/ib_model_io.h"
+#include "pipeline/node/ib_normalization.h"
+#include "sim/core/json_io.h"
+#include "sim/core/progress.h"
+
+namespace uavsim::pipeline {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+const char* const kPartNames[kModalityCount] = {"camera", "lidar", "radar"};
+
+double SecondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+// The best weights seen so far, kept in memory (parameters and buffers, in
+// the module's deterministic order).
+class BestWeights {
+ public:
+  void Take(const torch::nn::Module& m) {
+    torch::NoGradGuard no_grad;
+    saved_.clear();
+    for (const auto& p : m.parameters()) saved_.push_back(p.detach().clone());
+    for (const auto& b : m.buffers()) saved_.push_back(b.detach().clone());
+  }
+  void Restore(torch::nn::Module& m) const {
+    torch::NoGradGuard no_grad;
+    std::size_t i = 0;
+    for (auto& p : m.parameters()) p.copy_(saved_.at(i++));
+    for (auto& b : m.buffers()) b.copy_(saved_.at(i++));
+  }
+
+ private:
+  std::vector<torch::Tensor> saved_;
+};
+
+// Early stopping on a validation loss: remembers the best epoch and says when
+// `patience` epochs have passed without improvement.
+struct EarlyStopping {
+  int patience;
+  double best = std::numeric_limits<double>::infinity();
+  int best_epoch = 0, since_best = 0;
+  // True if `loss` is the new best.
+  bool Add(int epoch, double loss) {
+    if (loss < best) {
+      best = loss, best_epoch = epoch, since_best = 0;
+      return true;
+    }
+    ++since_best;
+    return false;
+  }
+  bool Stop() const { return since_best >= patience; }
+};
+
+// The epochs of one stage: train an epoch, validate, keep (and checkpoint)
+// the best weights, stop when `patience` epochs bring no improvement; ends
+// with the best weights restored, in eval mode. Fills the report's epoch
+// fields; report.initial_validation_loss must be set.
+template <class TrainEpoch, class Validate, class Checkpoint>
+void RunEpochs(torch::nn::Module& model, int max_epochs, int patience, const std::string& label,
+               bool quiet, TrainEpoch train_epoch, Validate validate, Checkpoint checkpoint,
+               StageReport& report, std::function<void(int)> epochs_since_best = {}) {
+  BestWeights best;
+  best.Take(model);
+  EarlyStopping stopping{patience};
+  stopping.Add(0, report.initial_validation_loss);
+  core::Progress progress(label, max_epochs, "epochs", quiet);
+  int epoch = 1;
+  for (; epoch <= max_epochs; ++epoch) {
+    model.train();
+    train_epoch();
+    if (stopping.Add(epoch, validate())) {
+      best.Take(model);
+      checkpoint(epoch);
+    }
+    progress.Update(epoch);
+    if (stopping.Stop()) break;
+    if (epochs_since_best) epochs_since_best(epoch - stopping.best_epoch);
+  }
+  progress.Finish();
+  best.Restore(model);
+  model.eval();
+  report.epochs = std::min(epoch, max_epochs);
+  report.best_epoch = stopping.best_epoch;
+  report.best_validation_loss = stopping.best;
+}
+
+// ---- Stage 1: one modality's IB-CC model on its observations ----
+
+std::vector<const Sample*> SamplesOf(const std::vector<Episode>& episodes, Modality m) {
+  std::vector<const Sample*> out;
+  for (const Episode& e : episodes)
+    for (const Sample& s : e.samples)
+      if (s.modality == m) out.push_back(&s);
+  return out;
+}
+
+// Whether an observation shows the target (TrainOptions::stage1_label_gate_*).
+bool ShowsTarget(const Sample& s, const TrainOptions& o) {
+  if (s.camera) {
+    if (!(o.stage1_label_gate_deg > 0)) return true;
+    const Eigen::Vector3d to_truth = (s.truth_m - s.camera->eye_left_w).normalized();
+    const double cos_angle =
+        std::clamp(to_truth.dot(s.camera->bearing_left_w.normalized()), -1.0, 1.0);
+    return std::acos(cos_angle) <= o.stage1_label_gate_deg * M_PI / 180.0;
+  }
+  if (!s.points || !(o.stage1_label_gate_m > 0)) return true;
+  const PointObservation& p = *s.points;
+  if (p.count() == 0) return false;
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (std::size_t i = 0; i < p.count(); ++i)
+    centroid += Eigen::Vector3d(p.values[i * p.channels], p.values[i * p.channels + 1],
+                                p.values[i * p.channels + 2]);
+  centroid /= static_cast<double>(p.count());
+  return (centroid - s.truth_m).norm() <= o.stage1_label_gate_m;
+}
+
+std::vector<const Sample*> TargetSamplesOf(const std::vector<Episode>& episodes, Modality m,
+                                           const TrainOptions& o, std::size_t* dropped) {
+  std::vector<const Sample*> out;
+  for (const Sample* s : SamplesOf(episodes, m))
+    ShowsTarget(*s, o) ? out.push_back(s) : void(++*dropped);
+  return out;
+}
+
+// At most `n` of `all`, evenly spaced (every episode and time represented).
+std::vector<const Sample*> EvenSubset(const std::vector<const Sample*>& all, int n) {
+  if (static_cast<int>(all.size()) <= n) return all;
+  std::vector<const Sample*> out;
+  for (int i = 0; i < n; ++i) out.push_back(all[all.size() * static_cast<std::size_t>(i) / n]);
+  return out;
+}
+
+IbInput MakeInput(const std::vector<const Sample*>& batch, Modality m, const IbNormalization& n) {
+  if (m == Modality::kCamera) {
+    std::vector<const CameraObservation*> obs;
+    for (const Sample* s : batch) obs.push_back(&*s->camera);
+    return MakeCameraInput(obs, n);
+  }
+  std::vector<const PointObservation*> obs;
+  for (const Sample* s : batch) obs.push_back(&*s->points);
+  return MakePointInput(obs, m, n);
+}
+
+torch::Tensor MakeTarget(const std::vector<const Sample*>& batch, const IbNormalization& n) {
+  std::vector<Eigen::Vector3d> truth;
+  for (const Sample* s : batch) truth.push_back(s->truth_m);
+  return MakePositionTarget(truth, n);
+}
+
+// Mean validation loss (eval mode: t = mu, no dropout), weighted by batch size.
+double IbValidationLoss(IbCcModel& model, const std::vector<const Sample*>& samples, int batch) {
+  if (samples.empty()) return 0.0;
+  torch::NoGradGuard no_grad;
+  model->eval();
+  const IbNormalization& n = model->config().normalization;
+  double sum = 0.0;
+  for (std::size_t i = 0; i < samples.size(); i += static_cast<std::size_t>(batch)) {
+    const std::vector<const Sample*> b(
+        samples.begin() + static_cast<std::ptrdiff_t>(i),
+        samples.begin() + static_cast<std::ptrdiff_t>(
+                              std::min(samples.size(), i + static_cast<std::size_t>(batch))));
+    const IbOutput out = model->forward(MakeInput(b, model->config().modality, n));
+    sum += model->Loss(out, MakeTarget(b, n)).total.item<double>() * static_cast<double>(b.size());
+  }
+  return sum / static_cast<double>(samples.size());
+}
+
+IbCcModel TrainEncoder(Modality m, const Dataset& data, const TrainOptions& o,
+                       const IbNormalization& norm, const std::string& checkpoint,
+                       StageReport& report) {
+  const auto start = Clock::now();
+  IbCcConfig config;
+  config.modality = m;
+  config.latent_dim = o.latent_dim;
+  config.dropout = o.dropout;
+  config.beta = o.beta;
+  config.bottleneck = o.bottleneck;
+  config.normalization = norm;
+  IbCcModel model(config);
+  std::size_t dropped = 0;
+  std::vector<const Sample*> train = TargetSamplesOf(data.train, m, o, &dropped);
+  std::vector<const Sample*> val = TargetSamplesOf(data.validation, m, o, &dropped);
+  report.label_gated_items = dropped;
+  if (val.empty() && train.size() >= 14) {
+    // The validation trajectories never saw this modality: hold back every
+    // seventh training observation instead.
+    std::vector<const Sample*> kept;
+    for (std::size_t i = 0; i < train.size(); ++i) (i % 7 == 6 ? val : kept).push_back(train[i]);
+    train = std::move(kept);
+  }
+  val = EvenSubset(val, o.stage1_max_validation_samples);
+  report.name = kPartNames[static_cast<int>(m)];
+  report.train_items = train.size();
+  report.validation_items = val.size();
+  report.initial_validation_loss = IbValidationLoss(model, val, o.stage1_batch);
+  report.best_validation_loss = report.initial_validation_loss;
+  // A modality the training episodes never observed keeps its initial weights.
+  if (train.size() < 2 || val.empty()) {
+    model->eval();
+    report.seconds = SecondsSince(start);
+    return model;
+  }
+
+  torch::optim::Adam adam(model->parameters(), torch::optim::AdamOptions(o.stage1_lr));
+  const auto n = static_cast<std::int64_t>(train.size());
+  const std::int64_t per_epoch =
+      std::clamp<std::int64_t>(n, o.stage1_min_samples_per_epoch, o.stage1_max_samples_per_epoch);
+  RunEpochs(
+      *model, o.stage1_max_epochs, o.stage1_patience, "train stage 1: " + report.name, o.quiet,
+      [&] {
+        // Shuffled passes over the training set, as many as fill the epoch.
+        std::vector<torch::Tensor> passes;
+        for (std::int64_t drawn = 0; drawn < per_epoch; drawn += n)
+          passes.push_back(torch::randperm(n, torch::TensorOptions().dtype(torch::kLong)));
+        const torch::Tensor order = torch::cat(passes);
+        const auto* idx = order.data_ptr<std::int64_t>();
+        for (std::int64_t i = 0; i + 1 < per_epoch; i += o.stage1_batch) {
+          std::vector<const Sample*> batch;
+          for (std::int64_t j = i; j < std::min<std::int64_t>(per_epoch, i + o.stage1_batch); ++j)
+            batch.push_back(train[static_cast<std::size_t>(idx[j])]);
+          if (batch.size() < 2) break;  // BatchNorm needs two
+          if (o.check_stop) o.check_stop();
+          adam.zero_grad();
+          const IbOutput out = model->forward(MakeInput(batch, m, norm));
+          model->Loss(out, MakeTarget(batch, norm)).total.backward();
+          adam.step();
+        }
+      },
+      [&] { return IbValidationLoss(model, val, o.stage1_batch); },
+      [&](int epoch) {
+        SaveIbCcModel(model, checkpoint, "checkpoint: epoch " + std::to_string(epoch));
+      },
+      report);
+  report.seconds = SecondsSince(start);
+  return model;
+}
+
+// ---- Stage 2: the edge network on sequences of aligned windows ----
+
+// One episode as the edge saw it: per window the aligned latents and masks,
+// and the truth (normalised).
+struct WindowSequence {
+  torch::Tensor latents;  // [K, M, z]
+  torch::Tensor mask;     // [K, M]
+  torch::Tensor truth;    // [K, 3]
+  // Per window, each modality's anchors (pipeline/anchored/anchors.h).
+  std::vector<WindowAnchors> anchors;
+};
+
+// mu of every sample, in the episodes' order.
+std::vector<std::vector<std::vector<float>>> EncodeEpisodes(const std::vector<Episode>& episodes,
+                                                            std::vector<IbCcModel>& encoders) {
+  torch::NoGradGuard no_grad;
+  std::vector<std::vector<std::vector<float>>> latents(episodes.size());
+  for (std::size_t e = 0; e < episodes.size(); ++e) {
+    const std::vector<Sample>& samples = episodes[e].samples;
+    latents[e].resize(samples.size());
+    for (int m = 0; m < kModalityCount; ++m) {
+      IbCcModel& model = encoders[static_cast<std::size_t>(m)];
+      model->eval();
+      std::vector<std::size_t> index;
+      for (std::size_t i = 0; i < samples.size(); ++i)
+        if (static_cast<int>(samples[i].modality) == m) index.push_back(i);
+      for (std::size_t i = 0; i < index.size(); i += 64) {
+        std::vector<const Sample*> batch;
+        for (std::size_t j = i; j < std::min(index.size(), i + 64); ++j)
+          batch.push_back(&samples[index[j]]);
+        const torch::Tensor mu =
+            model->Encode(MakeInput(batch, static_cast<Modality>(m), model->config().normalization))
+                .contiguous();
+        const float* p = mu.data_ptr<float>();
+        const auto z = static_cast<std::size_t>(mu.size(1));
+        for (std::size_t j = 0; j < batch.size(); ++j)
+          latents[e][index[i + j]].assign(p + j * z, p + (j + 1) * z);
+      }
+    }
+  }
+  return latents;
+}
+
+// TE-Align of each window of an episode from the on-time samples' latents.
+WindowSequence AlignEpisode(const Episode& ep, const std::vector<std::vector<float>>& latents,
+                            const TeAlign& align, const IbNormalization& norm) {
+  const auto k_count = static_cast<std::int64_t>(ep.window_truth.size());
+  std::vector<WindowInputs> inputs(static_cast<std::size_t>(k_count));
+  for (std::int64_t k = 0; k < k_count; ++k) inputs[static_cast<std::size_t>(k)].window = k + 1;
+  for (std::size_t i = 0; i < ep.samples.size(); ++i) {
+    const Sample& s = ep.samples[i];
+    if (!s.on_time) continue;
+    const std::int64_t k = align.WindowOf(s.t_s);
+    if (k < 1 || k > k_count) continue;
+    inputs[static_cast<std::size_t>(k - 1)].frames[static_cast<int>(s.modality)].push_back(
+        {s.t_s, latents[i], s.camera ? AnchorOf(*s.camera) : AnchorOf(*s.points)});
+  }
+  std::vector<std::vector<AlignedWindow>> one(1);
+  WindowSequence seq;
+  for (const WindowInputs& w : inputs) {
+    one[0].push_back(align.Align(w));
+    seq.anchors.push_back(align.AnchorsOf(w));
+  }
+  const FusionBatch b = StackWindows(one);
+  seq.latents = b.latents[0];
+  seq.mask = b.mask[0];
+  std::vector<Eigen::Vector3d> truth(ep.window_truth.begin(), ep.window_truth.end());
+  seq.truth = MakePositionTarget(truth, norm);
+  return seq;
+}
+
+// 1 from the first window in which any modality is available, else 0: the
+// windows a run reports an estimate for. mask [B, K, M] -> [B, K].
+torch::Tensor EstimatedWindows(const torch::Tensor& mask) {
+  return (std::get<0>(mask.amax(2).cummax(1)) > 0.5).to(torch::kFloat32);
+}
+
+// Mean squared error (summed over x, y, z) over the estimated windows.
+torch::Tensor MaskedMse(const torch::Tensor& y_hat, const torch::Tensor& y,
+                        const torch::Tensor& mask) {
+  const torch::Tensor w = EstimatedWindows(mask);
+  return ((y_hat - y).square().sum(2) * w).sum() / w.sum().clamp_min(1.0);
+}
+
+// The anchors the edge would hold over windows [start, start + K) of `s` from
+// a fresh tracker, where mask [K, M] is what arrived: a modality masked out in
+// a window brings no anchor either.
+std::vector<AnchorWindow> TrackAnchors(const WindowSequence& s, std::int64_t start,
+                                       const torch::Tensor& mask, const UavLocModelConfig& c) {
+  AnchorTracker tracker(c.window_s, c.position_centre_m, c.position_scale_m);
+  const torch::Tensor m = mask.to(torch::kFloat32).contiguous();
+  const auto acc = m.accessor<float, 2>();
+  std::vector<AnchorWindow> out;
+  for (std::int64_t i = 0; i < m.size(0); ++i) {
+    WindowAnchors arrived = s.anchors[static_cast<std::size_t>(start + i)];
+    for (int j = 0; j < kModalityCount; ++j)
+      if (acc[i][j] < 0.5f) arrived[static_cast<std::size_t>(j)].clear();
+    out.push_back(tracker.Update(i + 1, arrived));
+  }
+  return out;
+}
+
+// The whole sequence through the model with what mask [K, M] lets arrive:
+// normalised positions [1, K, 3].
+torch::Tensor ForwardSequence(UavLocModel& model, const WindowSequence& s,
+                              const torch::Tensor& mask) {
+  const AnchorBatch anchors = StackAnchors({TrackAnchors(s, 0, mask, model->config())});
+  return model->forward((s.latents * mask.unsqueeze(2)).unsqueeze(0), mask.unsqueeze(0), &anchors);
+}
+
+// The candidates' offsets from the truth over the training sequences as
+// the edge's tracker would give them (MedianCandidateOffsets).
+std::vector<Eigen::Vector3d> CandidateOffsets(const std::vector<WindowSequence>& train,
+                                              const UavLocModelConfig& c, double radius_m) {
+  std::vector<AnchorWindow> windows;
+  std::vector<Eigen::Vector3d> truth;
+  for (const WindowSequence& s : train) {
+    const std::vector<AnchorWindow> a = TrackAnchors(s, 0, s.mask, c);
+    windows.insert(windows.end(), a.begin(), a.end());
+    const torch::Tensor y = s.truth.to(torch::kFloat64).contiguous();
+    const auto acc = y.accessor<double, 2>();
+    for (std::int64_t k = 0; k < y.size(0); ++k)
+      truth.emplace_back(acc[k][0], acc[k][1], acc[k][2]);
+  }
+  const auto offsets = MedianCandidateOffsets(windows, truth, c.position_scale_m, radius_m,
+                                              TrainOptions::kMinOffsetWindows);
+  return {offsets.begin(), offsets.end()};
+}
+
+// Cross-entropy of the anchored head's weights log_w [B, K, H] over its
+// hypotheses h [B, K, H, 3] against the valid candidate nearest the truth
+// [B, K, 3] (the filter's track preferred by `preference`, normalised) if
+// within `radius` (normalised), else the nearer of the two free hypotheses;
+// mean over the estimated windows.
+torch::Tensor SelectionLoss(const torch::Tensor& log_w, const torch::Tensor& h,
+                            const torch::Tensor& truth, const torch::Tensor& mask, double radius,
+                            double preference) {
+  const torch::Tensor d =
+      (h.detach() - truth.unsqueeze(-2))
+          .norm(2, -1)
+          .masked_fill(~torch::isfinite(log_w.detach()), std::numeric_limits<float>::infinity());
+  torch::Tensor bonus = torch::zeros({kAnchorCandidates});
+  bonus[kFilterCandidate] = preference;
+  const auto [nearest, index] = (d.narrow(-1, 0, kAnchorCandidates) - bonus).min(-1);
+  const torch::Tensor free = d.narrow(-1, kAnchorCandidates, 2).argmin(-1) + kAnchorCandidates;
+  const torch::Tensor target = torch::where(nearest < radius, index, free);
+  const torch::Tensor w = EstimatedWindows(mask);
+  return -(log_w.gather(-1, target.unsqueeze(-1)).squeeze(-1) * w).sum() / w.sum().clamp_min(1.0);
+}
+
+// The expected squared error of the anchored head's hypotheses h [B, K, H,
+// 3] under their weights exp(log_w) [B, K, H] against the truth [B, K, 3],
+// over the estimated windows.
+torch::Tensor MixtureMse(const torch::Tensor& log_w, const torch::Tensor& h,
+                         const torch::Tensor& truth, const torch::Tensor& mask) {
+  const torch::Tensor w = EstimatedWindows(mask);
+  const torch::Tensor expected = (log_w.exp() * (h - truth.unsqueeze(-2)).square().sum(-1)).sum(-1);
+  return (expected * w).sum() / w.sum().clamp_min(1.0);
+}
+
+double FusionValidationLoss(UavLocModel& model, const std::vector<WindowSequence>& val) {
+  torch::NoGradGuard no_grad;
+  model->eval();
+  double sum = 0.0, count = 0.0;
+  for (const WindowSequence& s : val) {
+    const torch::Tensor mask = s.mask.unsqueeze(0);
+    const torch::Tensor y_hat = ForwardSequence(model, s, s.mask);
+    const torch::Tensor w = EstimatedWindows(mask);
+    sum += ((y_hat - s.truth.unsqueeze(0)).square().sum(2) * w).sum().item<double>();
+    count += w.sum().item<double>();
+  }
+  return count > 0 ? sum / count : 0.0;
+}
+
+// A training batch: random crops of K windows from random episodes, with
+// random modality dropout (a modality missing for the whole crop, or in
+// single windows), never more than the data already lacks.
+struct CropBatch {
+  FusionBatch fusion;
+  AnchorBatch anchors;
+  torch::Tensor truth;
+};
+CropBatch DrawCrops(const std::vector<WindowSequence>& train, int batch, std::int64_t k,
+                    const TrainOptions& o, const UavLocModelConfig& config) {
+  std::vector<torch::Tensor> lat, mask, y;
+  std::vector<std::vector<AnchorWindow>> anchors;
+  const torch::Tensor pick =
+      torch::randint(static_cast<std::int64_t>(train.size()), {batch}, torch::kLong);
+  for (int b = 0; b < batch; ++b) {
+    const WindowSequence& s = train[static_cast<std::size_t>(pick[b].item<std::int64_t>())];
+    const std::int64_t windows = s.latents.size(0);
+    // Half the crops start at the first window, as a run does.
+    std::int64_t start = 0;
+    if (windows > k && torch::rand({1}).item<double>() >= 0.5)
+      start = torch::randint(windows - k + 1, {1}, torch::kLong).item<std::int64_t>();
+    torch::Tensor m = s.mask.narrow(0, start, k).clone();
+    torch::Tensor keep = (torch::rand({1, kModalityCount}) >= o.modality_dropout).to(m.dtype());
+    if (keep.sum().item<double>() < 0.5) keep.fill_(1.0);  // never drop all three
+    m = m * keep * (torch::rand({k, kModalityCount}) >= o.window_dropout).to(m.dtype());
+    lat.push_back(s.latents.narrow(0, start, k) * m.unsqueeze(2));
+    anchors.push_back(TrackAnchors(s, start, m, config));
+    mask.push_back(m);
+    y.push_back(s.truth.narrow(0, start, k));
+  }
+  return {{torch::stack(lat), torch::stack(mask)}, StackAnchors(anchors), torch::stack(y)};
+}
+
+UavLocModel TrainFusion(const std::vector<WindowSequence>& train,
+                        const std::vector<WindowSequence>& val, const UavLocModelConfig& config,
+                        const TrainOptions& o, const std::string& checkpoint, StageReport& report) {
+  const auto start = Clock::now();
+  UavLocModel model(config);
+  report.name = "fusion";
+  report.train_items = train.size();
+  report.validation_items = val.size();
+  report.initial_validation_loss = FusionValidationLoss(model, val);
+  std::int64_t k = o.stage2_sequence_windows;
+  for (const WindowSequence& s : train) k = std::min<std::int64_t>(k, s.latents.size(0));
+
+  torch::optim::Adam adam(model->parameters(), torch::optim::AdamOptions(o.stage2_lr));
+  // An epoch sees about every training window twice.
+  std::int64_t windows = 0;
+  for (const WindowSequence& s : train) windows += s.latents.size(0);
+  const std::int64_t steps = std::max<std::int64_t>(
+      o.stage2_min_steps_per_epoch, 2 * windows / (k * static_cast<std::int64_t>(o.stage2_batch)));
+  RunEpochs(
+      *model, o.stage2_max_epochs, o.stage2_patience, "train stage 2: fusion + Mamba", o.quiet,
+      [&] {
+        for (std::int64_t step = 0; step < steps; ++step) {
+          const CropBatch b = DrawCrops(train, o.stage2_batch, k, o, config);
+          if (o.check_stop) o.check_stop();
+          adam.zero_grad();
+          torch::Tensor log_w, hypotheses;
+          const torch::Tensor y_hat =
+              model->forward(b.fusion.latents, b.fusion.mask, &b.anchors, &log_w, &hypotheses);
+          torch::Tensor loss = config.anchored && o.mixture_loss
+                                   ? MixtureMse(log_w, hypotheses, b.truth, b.fusion.mask)
+                                   : MaskedMse(y_hat, b.truth, b.fusion.mask);
+          if (config.anchored && o.selection_weight > 0.0)
+            loss = loss + o.selection_weight *
+                              SelectionLoss(log_w, hypotheses, b.truth, b.fusion.mask,
+                                            o.selection_radius_m / config.position_scale_m,
+                                            o.filter_preference_m / config.position_scale_m);
+          loss.backward();
+          adam.step();
+        }
+      },
+      [&] { return FusionValidationLoss(model, val); },
+      [&](int) { SaveUavLocModel(model, checkpoint); }, report,
+      [&, lr = o.stage2_lr, since_cut = 0](int since_best) mutable {
+        // Halve the learning rate after stage2_plateau_epochs without a
+        // better validation loss (counted from the last cut).
+        if (o.stage2_plateau_epochs <= 0 ||
+            std::min(since_best, ++since_cut) < o.stage2_plateau_epochs)
+          return;
+        lr *= 0.5;
+        since_cut = 0;
+        for (auto& group : adam.param_groups())
+          static_cast<torch::optim::AdamOptions&>(group.options()).lr(lr);
+      });
+  report.seconds = SecondsSince(start);
+  return model;
+}
+
+Evaluation Evaluate(UavLocModel& model, const std::vector<WindowSequence>& sequences) {
+  torch::NoGradGuard no_grad;
+  model->eval();
+  Evaluation ev;
+  const double scale = model->config().position_scale_m;
+  for (int subset = -1; subset < kModalityCount; ++subset) {
+    const std::string key = subset < 0 ? "all" : kPartNames[subset];
+    double sum = 0.0, count = 0.0;
+    for (const WindowSequence& s : sequences) {
+      torch::Tensor keep = torch::ones({1, kModalityCount});
+      if (subset >= 0) keep.zero_(), keep[0][subset] = 1.0;
+      const torch::Tensor mask = (s.mask * keep).unsqueeze(0);
+      const torch::Tensor y_hat = ForwardSequence(model, s, mask[0]);
+      const torch::Tensor w = EstimatedWindows(mask);
+      sum += ((y_hat - s.truth.unsqueeze(0)).square().sum(2) * w).sum().item<double>();
+      count += w.sum().item<double>();
+    }
+    ev.windows[key] = static_cast<std::size_t>(count);
+    ev.rmse_m[key] =
+        count > 0 ? scale * std::sqrt(sum / count) : std::numeric_limits<double>::quiet_NaN();
+  }
+  return ev;
+}
+
+std::vector<WindowSequence> AlignAll(const std::vector<Episode>& episodes,
+                                     std::vector<IbCcModel>& encoders, const TeAlign& align,
+                                     const IbNormalization& norm) {
+  const auto latents = EncodeEpisodes(episodes, encoders);
+  std::vector<WindowSequence> out;
+  for (std::size_t e = 0; e < episodes.size(); ++e)
+    if (!episodes[e].window_truth.empty())
+      out.push_back(AlignEpisode(episodes[e], latents[e], align, norm));
+  return out;
+}
+
+core::Json EvaluationJson(const Evaluation& ev) {
+  core::Json j = core::Json::object();
+  for (const auto& [key, rmse] : ev.rmse_m)
+    j[key] = {{"rmse_m", std::isfinite(rmse) ? core::Json(rmse) : core::Json(nullptr)},
+              {"windows", ev.windows.at(key)}};
+  return j;
+}
+
+}  // namespace
+
+void TrainOptions::Validate() const {
+  const auto require = [](bool ok, const char* field, const std::string& rule) {
+    if (!ok) throw std::invalid_argument(std::string("TrainOptions: ") + field + " " + rule);
+  };
+  require(latent_dim >= 2 && latent_dim % 2 == 0, "latent_dim", "must be even and >= 2");
+  require(window_s > 0 && std::isfinite(window_s), "window_s", "must be > 0");
+  require(dropout >= 0 && dropout < 1, "dropout", "must be in [0, 1)");
+  require(beta >= 0 && std::isfinite(beta), "beta", "must be >= 0");
+  require(stage1_lr > 0 && stage2_lr > 0, "stage1_lr and stage2_lr", "must be > 0");
+  require(stage1_batch >= 2 && stage2_batch >= 1, "stage1_batch and stage2_batch",
+          "must be >= 2 and >= 1");
+  require(stage1_max_epochs >= 0 && stage2_max_epochs >= 0, "max_epochs", "must be >= 0");
+  require(stage1_patience >= 1 && stage2_patience >= 1, "patience", "must be >= 1");
+  require(stage1_min_samples_per_epoch >= 2 &&
+              stage1_max_samples_per_epoch >= stage1_min_samples_per_epoch,
+          "stage1_min/max_samples_per_epoch", "must satisfy 2 <= min <= max");
+  require(stage1_max_validation_samples >= 1, "stage1_max_validation_samples", "must be >= 1");
+  require(stage1_label_gate_m >= 0 && stage1_label_gate_deg >= 0 && stage1_label_gate_deg <= 180,
+          "stage1_label_gate_m and stage1_label_gate_deg", "must be >= 0 (degrees at most 180)");
+  require(stage2_sequence_windows >= 1 && stage2_min_steps_per_epoch >= 1,
+          "stage2_sequence_windows and stage2_min_steps_per_epoch", "must be >= 1");
+  require(
+      modality_dropout >= 0 && modality_dropout <= 1 && window_dropout >= 0 && window_dropout <= 1,
+      "modality_dropout and window_dropout", "must be in [0, 1]");
+  require(d_model >= 1 && layers >= 1, "d_model and layers", "must be >= 1");
+  require(stage2_plateau_epochs >= 0, "stage2_plateau_epochs", "must be >= 0");
+  require(selection_weight >= 0 && std::isfinite(selection_weight) && selection_radius_m > 0 &&
+              std::isfinite(selection_radius_m) && filter_preference_m >= 0 &&
+              std::isfinite(filter_preference_m),
+          "selection_weight, selection_radius_m and filter_preference_m",
+          "must be finite, >= 0, > 0 and >= 0");
+  // The model keeps offsets within 1 m per axis (kMaxCandidateOffset_m).
+  require(offset_calibration_radius_m >= 0 && offset_calibration_radius_m <= 1.0,
+          "offset_calibration_radius_m", "must be in [0, 1] m");
+}
+
+TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& o, const ModelManifest& manifest,
+                        const std::string& out_dir) {
+  o.Validate();
+  if (data.train.empty() || data.validation.empty())
+    throw std::invalid_argument("train: need at least one training and one validation episode");
+  for (const auto* part : {&data.train, &data.validation, &data.test})
+    for (const Episode& e : *part)
+      if (std::abs(e.window_s - o.window_s) > 1e-12)
+        throw std::invalid_argument("train: episode \"" + e.label + "\" has " +
+                                    core::FormatNumber(e.window_s) + " s windows, training " +
+                                    core::FormatNumber(o.window_s) + " s");
+  torch::manual_seed(o.seed);
+  std::vector<Eigen::Vector3d> positions;
+  for (const Episode& e : data.train)
+    positions.insert(positions.end(), e.window_truth.begin(), e.window_truth.end());
+  const IbNormalization norm = FitPositionNormalization(positions);
+
+  const fs::path out(out_dir);
+  const fs::path checkpoints = out / "checkpoints";
+  fs::create_directories(checkpoints);
+  TrainReport report;
+  std::vector<IbCcModel> encoders;
+  for (int m = 0; m < kModalityCount; ++m) {
+    StageReport stage;
+    encoders.push_back(TrainEncoder(static_cast<Modality>(m), data, o, norm,
+                                    (checkpoints / (std::string(kPartNames[m]) + ".json")).string(),
+                                    stage));
+    report.stages.push_back(stage);
+  }
+
+  UavLocModelConfig config;
+  config.latent_dim = o.latent_dim;
+  config.window_s = o.window_s;
+  config.d_model = o.d_model;
+  config.layers = o.layers;
+  config.anchored = o.anchored;
+  config.position_centre_m = norm.centre_m;
+  config.position_scale_m = norm.scale_m;
+  const TeAlign align(config.te_align());
+  const std::vector<WindowSequence> train = AlignAll(data.train, encoders, align, norm);
+  const std::vector<WindowSequence> val = AlignAll(data.validation, encoders, align, norm);
+  if (o.anchored && o.offset_calibration_radius_m > 0.0) {
+    config.candidate_offset_m = CandidateOffsets(train, config, o.offset_calibration_radius_m);
+    report.candidate_offset_m = config.candidate_offset_m;
+  }
+  StageReport fusion_stage;
+  UavLocModel model =
+      TrainFusion(train, val, config, o, (checkpoints / manifest.edge).string(), fusion_stage);
+  report.stages.push_back(fusion_stage);
+  if (!data.test.empty()) report.test = Evaluate(model, AlignAll(data.test, encoders, align, norm));
+
+  ModelManifest m = manifest;
+  m.latent_dim = o.latent_dim;
+  m.window_s = o.window_s;
+  const std::string* names[kModalityCount] = {&m.camera, &m.lidar, &m.radar};
+  for (int i = 0; i < kModalityCount; ++i)
+    SaveIbCcModel(encoders[static_cast<std::size_t>(i)], (out / *names[i]).string(), m.note);
+  SaveUavLocModel(model, (out / m.edge).string());
+  fs::remove_all(checkpoints);
+  {
+    const std::string text = ReportJson(report, o);
+    const fs::path p = out / "training_report.json";
+    std::ofstream f(p, std::ios::binary | std::ios::trunc);
+    f << text;
+    if (!f) throw std::runtime_error(p.string() + ": cannot write");
+  }
+  WriteModelManifest(m, (out / "model.json").string());
+  return report;
+}
+
+Evaluation EvaluateModel(const std::string& model_path, const std::vector<Episode>& episodes) {
+  const std::string manifest_path = ModelManifestPath(model_path);
+  const ModelManifest m = ReadModelManifest(manifest_path);
+  const fs::path folder = fs::path(manifest_path).parent_path();
+  std::vector<IbCcModel> encoders;
+  for (const std::string* name : {&m.camera, &m.lidar, &m.radar})
+    encoders.push_back(LoadIbCcModel((folder / *name).string()));
+  UavLocModel model = LoadUavLocModel((folder / m.edge).string());
+  const IbNormalization& norm = encoders.front()->config().normalization;
+  return Evaluate(model, AlignAll(episodes, encoders, model->te_align(), norm));
+}
+
+std::string ReportJson(const TrainReport& r, const TrainOptions& o) {
+  core::Json j = core::Json::object();
+  j["seed"] = o.seed;
+  j["latent_dim"] = o.latent_dim;
+  j["bottleneck"] = o.bottleneck == IbBottleneck::kIb ? "ib" : "mlp";
+  j["head"] = o.anchored ? "anchored" : "paper";
+  if (o.anchored) {
+    j["selection_loss"] = {{"weight", o.selection_weight},
+                           {"radius_m", o.selection_radius_m},
+                           {"filter_preference_m", o.filter_preference_m}};
+    j["position_loss"] = o.mixture_loss ? "mixture" : "mean";
+    j["offset_calibration_radius_m"] = o.offset_calibration_radius_m;
+    core::Json offsets = core::Json::array();
+    for (const Eigen::Vector3d& v : r.candidate_offset_m) offsets.push_back({v.x(), v.y(), v.z()});
+    j["candidate_offset_m"] = offsets;
+  }
+  j["stage2_plateau_epochs"] = o.stage2_plateau_epochs;
+  j["learning_rate"] = {{"stage1", o.stage1_lr}, {"stage2", o.stage2_lr}};
+  j["stage1_label_gate"] = {{"m", o.stage1_label_gate_m}, {"deg", o.stage1_label_gate_deg}};
+  core::Json stages = core::Json::array();
+  for (const StageReport& s : r.stages)
+    stages.push_back({{"name", s.name},
+                      {"train_items", s.train_items},
+                      {"label_gated_items", s.label_gated_items},
+                      {"validation_items", s.validation_items},
+                      {"epochs", s.epochs},
+                      {"best_epoch", s.best_epoch},
+                      {"initial_validation_loss", s.initial_validation_loss},
+                      {"best_validation_loss", s.best_validation_loss},
+                      {"seconds", s.seconds}});
+  j["stages"] = stages;
+  j["test"] = EvaluationJson(r.test);
+  return j.dump(2) + "\n";
+}
+
+}  // namespace uavsim::pipeline

@@ -1,0 +1,131 @@
+// TE-Align (paper Sec. V-A, Eqs. (19)-(20)): the sinusoidal encoding against
+// its closed form, window assignment at boundaries, average pooling, empty
+// windows and bad input.
+#include "pipeline/edge/te_align.h"
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <stdexcept>
+#include <vector>
+
+namespace uavsim::pipeline {
+namespace {
+
+TeAlignConfig Config(int z) {
+  TeAlignConfig c;
+  c.latent_dim = z;
+  return c;
+}
+
+LatentFrame Frame(double t_s, std::vector<float> latent) { return {t_s, std::move(latent), {}}; }
+
+}  // namespace
+
+TEST_CASE("TeAlign: encoding equals the closed form of Eq. (19)", "[pipeline]") {
+  for (int z : {4, 8, 16, 32, 64}) {
+    const TeAlign align(Config(z));
+    for (double tau : {0.0, 0.37, 33.3, 199.999, 1234.5}) {
+      const std::vector<double> e = align.Encoding(tau);
+      REQUIRE(e.size() == static_cast<std::size_t>(z));
+      for (int j = 1; j <= z / 2; ++j) {
+        const double angle = tau / std::pow(10000.0, 2.0 * j / z);
+        CHECK(e[2 * (j - 1)] == Approx(std::sin(angle)).margin(1e-12));
+        CHECK(e[2 * (j - 1) + 1] == Approx(std::cos(angle)).margin(1e-12));
+      }
+    }
+  }
+}
+
+TEST_CASE("TeAlign: tau is the offset into the window in time units", "[pipeline]") {
+  const TeAlign align(Config(16));
+  CHECK(align.Tau(0.4, 3) == Approx(0.0).margin(1e-9));
+  CHECK(align.Tau(0.433, 3) == Approx(33.0).margin(1e-6));  // milliseconds
+  CHECK(align.Tau(1000.1999, 5001) == Approx(199.9).margin(1e-6));
+}
+
+TEST_CASE("TeAlign: window k holds (k-1) t^w <= t < k t^w", "[pipeline]") {
+  const TeAlign align(Config(16));
+  CHECK(align.WindowOf(0.0) == 1);
+  CHECK(align.WindowOf(0.199999999) == 1);
+  CHECK(align.WindowOf(0.2) == 2);  // a boundary opens the next window
+  CHECK(align.WindowOf(0.6) == 4);  // 0.6 / 0.2 = 2.9999999999999996 in binary
+  CHECK(align.WindowOf(0.6 - 1e-9) == 3);
+  CHECK(align.WindowOf(1.0) == 6);
+  CHECK(align.WindowOf(3600.0) == 18001);
+  CHECK(align.WindowOf(-0.1) == 0);
+  CHECK(align.WindowOf(-0.2) == 0);
+  CHECK(align.WindowOf(-0.2000001) == -1);
+  CHECK(align.WindowStart_s(4) == Approx(0.6));
+  for (int k = 1; k < 2000; ++k) {
+    const double start = align.WindowStart_s(k);
+    CHECK(align.WindowOf(start) == k);
+    CHECK(align.WindowOf(start + 0.2 - 1e-9) == k);
+  }
+  CHECK_THROWS_AS(align.WindowOf(std::nan("")), std::invalid_argument);
+  CHECK_THROWS_AS(align.WindowOf(1e10), std::invalid_argument);
+}
+
+TEST_CASE("TeAlign: pooling averages latent plus encoding over the window", "[pipeline]") {
+  const int z = 4;
+  const TeAlign align(Config(z));
+  WindowInputs in;
+  in.window = 3;  // [0.4, 0.6)
+  auto& camera = in.frames[static_cast<int>(Modality::kCamera)];
+  camera.push_back(Frame(0.40, {1, 2, 3, 4}));
+  camera.push_back(Frame(0.45, {3, 2, 1, 0}));
+  camera.push_back(Frame(0.60, {100, 100, 100, 100}));  // next window: ignored
+  camera.push_back(Frame(0.38, {100, 100, 100, 100}));  // previous window: ignored
+  in.frames[static_cast<int>(Modality::kRadar)].push_back(Frame(0.5999, {-1, 0, 1, 2}));
+
+  const AlignedWindow out = align.Align(in);
+  CHECK(out.window == 3);
+  CHECK(out.frames_outside_window == 2);
+  CHECK(out.mask[0] == 1.0f);
+  CHECK(out.mask[1] == 0.0f);
+  CHECK(out.mask[2] == 1.0f);
+
+  // Closed form with plain doubles: E(τ) for τ in ms from the window start.
+  auto encoding = [&](double tau_ms, int i) {
+    const int j = i / 2 + 1;
+    const double angle = tau_ms / std::pow(10000.0, 2.0 * j / z);
+    return i % 2 == 0 ? std::sin(angle) : std::cos(angle);
+  };
+  const double a[4] = {1, 2, 3, 4};
+  const double b[4] = {3, 2, 1, 0};
+  const double r[4] = {-1, 0, 1, 2};
+  for (int i = 0; i < z; ++i) {
+    const double camera_expected = 0.5 * ((a[i] + encoding(0.0, i)) + (b[i] + encoding(50.0, i)));
+    CHECK(out.latent[0][static_cast<std::size_t>(i)] == Approx(camera_expected).margin(1e-6));
+    CHECK(out.latent[1][static_cast<std::size_t>(i)] == 0.0f);
+    CHECK(out.latent[2][static_cast<std::size_t>(i)] ==
+          Approx(r[i] + encoding(199.9, i)).margin(1e-6));
+  }
+}
+
+TEST_CASE("TeAlign: an empty window gives masks 0 and zero vectors", "[pipeline]") {
+  const TeAlign align(Config(8));
+  WindowInputs in;
+  in.window = 17;
+  const AlignedWindow out = align.Align(in);
+  for (int m = 0; m < kModalityCount; ++m) {
+    CHECK(out.mask[static_cast<std::size_t>(m)] == 0.0f);
+    CHECK(out.latent[static_cast<std::size_t>(m)] == std::vector<float>(8, 0.0f));
+  }
+}
+
+TEST_CASE("TeAlign: bad latents and configurations are refused", "[pipeline]") {
+  const TeAlign align(Config(4));
+  WindowInputs in;
+  in.window = 1;
+  in.frames[1].push_back(Frame(0.1, {1, 2, 3}));
+  CHECK_THROWS_WITH(align.Align(in), Catch::Contains("3 values, expected z = 4"));
+  in.frames[1][0].latent = {1, 2, std::nanf(""), 4};
+  CHECK_THROWS_WITH(align.Align(in), Catch::Contains("non-finite"));
+  TeAlignConfig odd = Config(5);
+  CHECK_THROWS_WITH(TeAlign(odd), Catch::Contains("latent_dim (5)"));
+  TeAlignConfig zero_window = Config(4);
+  zero_window.window_s = 0.0;
+  CHECK_THROWS_WITH(TeAlign(zero_window), Catch::Contains("window_s (0)"));
+}
+
+}  // namespace uavsim::pipeline

@@ -1,0 +1,210 @@
+// LidarPreprocessor on synthetic scans whose truth is known by construction:
+// a static scene (ground, a wall, a pole) sampled with range noise, and
+// boxes of points that move through it.
+#include <Eigen/Core>
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <vector>
+
+#include "pipeline/node/lidar_preprocessor.h"
+#include "sim/core/rng.h"
+
+namespace uavsim::pipeline {
+namespace {
+
+// The static scene, the same surface samples every scan, each with fresh
+// 2 cm noise (the LiDAR's default range noise) and sweep offsets in
+// [0, 0.1) s.
+std::vector<sensors::LidarPoint> StaticScene(int scan) {
+  core::RngStream noise(11, "preprocess_lidar_test/scan" + std::to_string(scan));
+  std::vector<sensors::LidarPoint> points;
+  auto add = [&](double x, double y, double z) {
+    points.push_back({static_cast<float>(x + noise.Normal(0.0, 0.02)),
+                      static_cast<float>(y + noise.Normal(0.0, 0.02)),
+                      static_cast<float>(z + noise.Normal(0.0, 0.02)), 0.4f,
+                      static_cast<float>(noise.Uniform(0.0, 0.1))});
+  };
+  for (double x = 2.0; x < 40.0; x += 0.3)  // ground
+    for (double y = -15.0; y < 15.0; y += 0.3) add(x, y, 0.0);
+  for (double y = -15.0; y < 15.0; y += 0.25)  // a wall at x = 40
+    for (double z = 0.0; z < 12.0; z += 0.25) add(40.0, y, z);
+  for (double z = 0.0; z < 6.0; z += 0.1) add(20.0, 5.0, z);  // a pole
+  return points;
+}
+
+// A box's surface sampled on a grid: n x n points on each of its six faces,
+// intensity 0.9, t_offset 0.05 s.
+std::vector<sensors::LidarPoint> Box(const Eigen::Vector3d& centre, double size_m, int n) {
+  std::vector<sensors::LidarPoint> points;
+  for (int axis = 0; axis < 3; ++axis)
+    for (int side = -1; side <= 1; side += 2)
+      for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+          Eigen::Vector3d p;
+          p[axis] = side * 0.5 * size_m;
+          p[(axis + 1) % 3] = (i + 0.5) / n * size_m - 0.5 * size_m;
+          p[(axis + 2) % 3] = (j + 0.5) / n * size_m - 0.5 * size_m;
+          p += centre;
+          points.push_back({static_cast<float>(p.x()), static_cast<float>(p.y()),
+                            static_cast<float>(p.z()), 0.9f, 0.05f});
+        }
+  return points;
+}
+
+sensors::PointCloudFrame Scan(int scan,
+                              const std::vector<std::vector<sensors::LidarPoint>>& extra) {
+  sensors::PointCloudFrame frame;
+  frame.t_start_s = 0.1 * scan;
+  frame.points = StaticScene(scan);
+  for (const auto& e : extra) frame.points.insert(frame.points.end(), e.begin(), e.end());
+  return frame;
+}
+
+bool InsideBox(const float* p, const Eigen::Vector3d& centre, double size_m) {
+  for (int k = 0; k < 3; ++k)
+    if (std::abs(p[k] - centre[k]) > 0.5 * size_m + 1e-4) return false;
+  return true;
+}
+
+sensors::LidarConfig Sensor() {
+  sensors::LidarConfig c;
+  c.pose.position_m = Eigen::Vector3d(0.0, 0.0, 1.5);
+  return c;
+}
+
+TEST_CASE("LidarPreprocessor: the static scene vanishes, a moving box is kept whole",
+          "[pipeline]") {
+  const PreprocessConfig config;
+  LidarPreprocessor pre(Sensor(), config);
+  const int warmup = config.lidar.warmup_frames;
+  for (int k = 0; k < warmup; ++k) {
+    const PointObservation obs = pre.Process(Scan(k, {}));
+    CHECK(obs.count() == 0);
+    CHECK(obs.channels == 4);
+    CHECK(pre.warmed_up() == (k == warmup - 1));
+  }
+  CHECK(pre.static_voxel_count() > 1000);
+
+  SECTION("static scan: nothing left") {
+    const PointObservation obs = pre.Process(Scan(warmup, {}));
+    CHECK(obs.count() == 0);
+    CHECK(obs.t_s == Approx(0.1 * warmup));
+  }
+  SECTION("moving box") {
+    for (int k = 0; k < 8; ++k) {
+      const Eigen::Vector3d centre(10.0 + 1.5 * k, -3.0 + 0.2 * k, 8.0 - 0.3 * k);
+      const std::vector<sensors::LidarPoint> box = Box(centre, 0.5, 6);
+      const PointObservation obs = pre.Process(Scan(warmup + k, {box}));
+      INFO("scan " << k);
+      REQUIRE(obs.count() == box.size());  // 216 points
+      for (std::size_t i = 0; i < obs.count(); ++i) {
+        CHECK(InsideBox(&obs.values[4 * i], centre, 0.5));
+        CHECK(obs.values[4 * i + 3] == 0.9f);  // intensity passes through
+      }
+      CHECK(obs.t_s == Approx(0.1 * (warmup + k) + 0.05));  // when the box was swept
+      CHECK(obs.sensor_position_w == Eigen::Vector3d(0.0, 0.0, 1.5));
+    }
+  }
+  SECTION("a bird's few points are a smaller cluster and are dropped") {
+    const Eigen::Vector3d uav(15.0, 2.0, 6.0), bird(25.0, -6.0, 9.0);
+    const PointObservation obs = pre.Process(Scan(warmup, {Box(bird, 0.2, 2), Box(uav, 0.5, 6)}));
+    REQUIRE(obs.count() == 216);
+    for (std::size_t i = 0; i < obs.count(); ++i) CHECK(InsideBox(&obs.values[4 * i], uav, 0.5));
+  }
+  SECTION("clusters_kept 0 keeps every dynamic point") {
+    PreprocessConfig all = config;
+    all.lidar.clusters_kept = 0;
+    LidarPreprocessor keep_all(Sensor(), all);
+    for (int k = 0; k < warmup; ++k) keep_all.Process(Scan(k, {}));
+    const PointObservation obs = keep_all.Process(
+        Scan(warmup, {Box({25.0, -6.0, 9.0}, 0.2, 2), Box({15.0, 2.0, 6.0}, 0.5, 6)}));
+    CHECK(obs.count() == 24 + 216);
+  }
+  SECTION("more than 1024 dynamic points: 1024, evenly spaced") {
+    const std::vector<sensors::LidarPoint> box = Box({15.0, 2.0, 6.0}, 1.0, 20);  // 2400
+    const PointObservation obs = pre.Process(Scan(warmup, {box}));
+    REQUIRE(obs.count() == 1024);
+    // The i-th kept point is the box's floor(i * 2400 / 1024)-th.
+    for (std::size_t i : {std::size_t{0}, std::size_t{1}, std::size_t{517}, std::size_t{1023}}) {
+      const sensors::LidarPoint& p = box[i * box.size() / 1024];
+      CHECK(obs.values[4 * i + 0] == p.x_m);
+      CHECK(obs.values[4 * i + 1] == p.y_m);
+      CHECK(obs.values[4 * i + 2] == p.z_m);
+    }
+  }
+}
+
+TEST_CASE(
+    "LidarPreprocessor: with an occupancy fraction, a target crossing the warm-up stays "
+    "dynamic",
+    "[pipeline]") {
+  // Every static surface sample is in every scan here (a spinning LiDAR):
+  // a fraction no passing target reaches keeps its path out of the
+  // background.
+  PreprocessConfig config;
+  config.lidar.occupancy_threshold = 0.25;
+  LidarPreprocessor pre(Sensor(), config);
+  const int warmup = config.lidar.warmup_frames;
+  for (int k = 0; k < warmup; ++k) {
+    const Eigen::Vector3d centre(10.0 + 0.6 * k, -3.0, 8.0);
+    CHECK(pre.Process(Scan(k, {Box(centre, 0.5, 6)})).count() == 0);
+  }
+  for (int k = 0; k < 8; ++k) {  // back along the same path
+    const Eigen::Vector3d centre(10.0 + 1.5 * k, -3.0, 8.0);
+    INFO("scan " << k);
+    CHECK(pre.Process(Scan(warmup + k, {Box(centre, 0.5, 6)})).count() == 216);
+  }
+  // The default (one hit makes a voxel static) absorbs that path.
+  LidarPreprocessor any_hit(Sensor(), PreprocessConfig{});
+  for (int k = 0; k < warmup; ++k)
+    any_hit.Process(Scan(k, {Box({10.0 + 0.6 * k, -3.0, 8.0}, 0.5, 6)}));
+  CHECK(any_hit.Process(Scan(warmup, {Box({10.0, -3.0, 8.0}, 0.5, 6)})).count() == 0);
+}
+
+TEST_CASE("LidarPreprocessor: deterministic, and Reset forgets the background", "[pipeline]") {
+  const PreprocessConfig config;
+  std::vector<PointObservation> runs[2];
+  for (auto& run : runs) {
+    LidarPreprocessor pre(Sensor(), config);
+    for (int k = 0; k < config.lidar.warmup_frames + 5; ++k)
+      run.push_back(pre.Process(Scan(k, {Box({12.0 + k, 0.0, 7.0}, 0.5, 5)})));
+  }
+  for (std::size_t k = 0; k < runs[0].size(); ++k) {
+    CHECK(runs[0][k].values == runs[1][k].values);
+    CHECK(runs[0][k].t_s == runs[1][k].t_s);
+  }
+  LidarPreprocessor pre(Sensor(), config);
+  for (int k = 0; k < config.lidar.warmup_frames; ++k) pre.Process(Scan(k, {}));
+  REQUIRE(pre.warmed_up());
+  pre.Reset();
+  CHECK_FALSE(pre.warmed_up());
+  CHECK(pre.static_voxel_count() == 0);
+  CHECK(pre.Process(Scan(0, {Box({12.0, 0.0, 7.0}, 0.5, 5)})).count() == 0);
+}
+
+TEST_CASE("LidarPreprocessor: raw variant subsamples the whole cloud from the first scan",
+          "[pipeline]") {
+  PreprocessConfig config;
+  config.lidar.raw = true;
+  LidarPreprocessor pre(Sensor(), config);
+  const sensors::PointCloudFrame frame = Scan(0, {});
+  REQUIRE(frame.points.size() > 15000);
+  const PointObservation obs = pre.Process(frame);
+  REQUIRE(obs.count() == 1024);
+  CHECK(obs.channels == 4);
+  for (std::size_t i : {std::size_t{0}, std::size_t{300}, std::size_t{1023}}) {
+    const sensors::LidarPoint& p = frame.points[i * frame.points.size() / 1024];
+    CHECK(obs.values[4 * i + 0] == p.x_m);
+    CHECK(obs.values[4 * i + 3] == p.intensity);
+  }
+  sensors::PointCloudFrame small;
+  small.points = Box({5.0, 0.0, 2.0}, 1.0, 4);            // 96 points
+  small.points.push_back({NAN, 0.0f, 0.0f, 0.5f, 0.0f});  // dropped
+  CHECK(pre.Process(small).count() == 96);
+  PreprocessConfig all_raw;
+  all_raw.raw = true;
+  CHECK(LidarPreprocessor(Sensor(), all_raw).Process(frame).count() == 1024);
+}
+
+}  // namespace
+}  // namespace uavsim::pipeline

@@ -1,0 +1,222 @@
+// RadarPreprocessor and the DBSCAN it uses: clusters known by construction,
+// and DBSCAN against a brute-force implementation of its definition.
+#include <Eigen/Core>
+#include <algorithm>
+#include <catch2/catch.hpp>
+#include <map>
+#include <vector>
+
+#include "pipeline/node/point_clustering.h"
+#include "pipeline/node/radar_preprocessor.h"
+#include "sim/core/rng.h"
+
+namespace uavsim::pipeline {
+namespace {
+
+// n detections scattered (0.3 m) around `centre`, all at `velocity_mps`.
+std::vector<sensors::RadarPoint> Cluster(const Eigen::Vector3d& centre, int n, double velocity_mps,
+                                         core::RngStream& rng) {
+  std::vector<sensors::RadarPoint> points;
+  for (int i = 0; i < n; ++i)
+    points.push_back({static_cast<float>(centre.x() + rng.Normal(0.0, 0.3)),
+                      static_cast<float>(centre.y() + rng.Normal(0.0, 0.3)),
+                      static_cast<float>(centre.z() + rng.Normal(0.0, 0.3)),
+                      static_cast<float>(velocity_mps), static_cast<float>(15.0 + i % 7)});
+  return points;
+}
+
+// Interleaves the clusters' points (radar detections come in range order,
+// not cluster by cluster).
+sensors::RadarFrame Frame(const std::vector<std::vector<sensors::RadarPoint>>& clusters) {
+  sensors::RadarFrame frame;
+  frame.t_capture_s = 1.25;
+  for (std::size_t i = 0;; ++i) {
+    bool any = false;
+    for (const auto& c : clusters)
+      if (i < c.size()) frame.points.push_back(c[i]), any = true;
+    if (!any) break;
+  }
+  return frame;
+}
+
+bool Near(const float* p, const Eigen::Vector3d& centre, double radius_m) {
+  return (Eigen::Vector3d(p[0], p[1], p[2]) - centre).norm() < radius_m;
+}
+
+sensors::FmcwRadarConfig Sensor() {
+  sensors::FmcwRadarConfig c;
+  c.pose.position_m = Eigen::Vector3d(-20.0, 5.0, 2.0);
+  return c;
+}
+
+TEST_CASE("RadarPreprocessor: of clusters of 30 and 5 points, the 30 are kept", "[pipeline]") {
+  core::RngStream rng(3, "preprocess_radar_test/30_5");
+  const Eigen::Vector3d uav(20.0, 10.0, 30.0), bird(12.0, 18.0, 25.0);
+  const auto uav_points = Cluster(uav, 30, -4.0, rng);
+  const auto bird_points = Cluster(bird, 5, 2.0, rng);
+  const RadarPreprocessor pre(Sensor(), PreprocessConfig{});
+  // The bird first: order must not matter.
+  const PointObservation obs = pre.Process(Frame({bird_points, uav_points}));
+  CHECK(obs.channels == 5);
+  CHECK(obs.t_s == 1.25);
+  CHECK(obs.sensor_position_w == Eigen::Vector3d(-20.0, 5.0, 2.0));
+  REQUIRE(obs.count() == 30);
+  for (std::size_t i = 0; i < obs.count(); ++i) {
+    CHECK(Near(&obs.values[5 * i], uav, 2.0));
+    CHECK(obs.values[5 * i + 3] == -4.0f);  // radial velocity passes through
+    CHECK(obs.values[5 * i + 4] >= 15.0f);  // SNR too
+  }
+}
+
+TEST_CASE("RadarPreprocessor: velocity separates co-located clusters when weighted", "[pipeline]") {
+  core::RngStream rng(3, "preprocess_radar_test/velocity");
+  const Eigen::Vector3d here(20.0, 10.0, 30.0);
+  const auto fast = Cluster(here, 12, -6.0, rng);
+  const auto slow = Cluster(here, 8, 1.0, rng);
+  PreprocessConfig config;
+  CHECK(RadarPreprocessor(Sensor(), config).Process(Frame({fast, slow})).count() == 20);
+  config.radar.velocity_weight_s = 1.0;  // 7 m/s apart: 7 m in feature space
+  const PointObservation obs = RadarPreprocessor(Sensor(), config).Process(Frame({fast, slow}));
+  REQUIRE(obs.count() == 12);
+  for (std::size_t i = 0; i < obs.count(); ++i) CHECK(obs.values[5 * i + 3] == -6.0f);
+}
+
+TEST_CASE("RadarPreprocessor: at most 1024 points, raw keeps every detection", "[pipeline]") {
+  core::RngStream rng(3, "preprocess_radar_test/cap");
+  const auto big = Cluster({30.0, 0.0, 20.0}, 3000, -3.0, rng);
+  const RadarPreprocessor pre(Sensor(), PreprocessConfig{});
+  const PointObservation obs = pre.Process(Frame({big}));
+  REQUIRE(obs.count() == 1024);
+  for (std::size_t i : {std::size_t{0}, std::size_t{700}, std::size_t{1023}})
+    CHECK(obs.values[5 * i] == big[i * big.size() / 1024].x_m);
+
+  PreprocessConfig raw;
+  raw.radar.raw = true;
+  const auto a = Cluster({20.0, 10.0, 30.0}, 60, -4.0, rng);
+  const auto b = Cluster({-10.0, 40.0, 15.0}, 40, 2.0, rng);
+  const sensors::RadarFrame frame = Frame({a, b});
+  const PointObservation all = RadarPreprocessor(Sensor(), raw).Process(frame);
+  REQUIRE(all.count() == 100);
+  for (std::size_t i = 0; i < all.count(); ++i) CHECK(all.values[5 * i] == frame.points[i].x_m);
+  CHECK(RadarPreprocessor(Sensor(), raw).Process(Frame({big})).count() == 1024);
+  CHECK(RadarPreprocessor(Sensor(), raw).Process(sensors::RadarFrame{}).count() == 0);
+}
+
+TEST_CASE("RadarPreprocessor: deterministic", "[pipeline]") {
+  core::RngStream rng(3, "preprocess_radar_test/determinism");
+  const sensors::RadarFrame frame =
+      Frame({Cluster({5.0, 5.0, 5.0}, 20, 1.0, rng), Cluster({9.0, 5.0, 5.0}, 20, 1.0, rng),
+             Cluster({40.0, 5.0, 5.0}, 7, 1.0, rng)});
+  const RadarPreprocessor pre(Sensor(), PreprocessConfig{});
+  CHECK(pre.Process(frame).values == pre.Process(frame).values);
+  CHECK(RadarPreprocessor(Sensor(), PreprocessConfig{}).Process(frame).values ==
+        pre.Process(frame).values);
+}
+
+// DBSCAN by its definition, O(n^2): core points, their eps-connected
+// components, border points.
+struct Reference {
+  std::vector<bool> core;
+  std::vector<int> component;  // of core points; -1 otherwise
+};
+
+Reference BruteForce(const std::vector<float>& xyz, double eps, int min_points) {
+  const std::size_t n = xyz.size() / 3;
+  auto close = [&](std::size_t a, std::size_t b) {
+    double d2 = 0.0;
+    for (int k = 0; k < 3; ++k)
+      d2 += (xyz[3 * a + k] - xyz[3 * b + k]) * (xyz[3 * a + k] - xyz[3 * b + k]);
+    return d2 < eps * eps;
+  };
+  Reference r;
+  r.core.assign(n, false);
+  r.component.assign(n, -1);
+  for (std::size_t i = 0; i < n; ++i) {
+    int count = 0;
+    for (std::size_t j = 0; j < n; ++j) count += close(i, j);
+    r.core[i] = count >= min_points;
+  }
+  int next = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!r.core[i] || r.component[i] >= 0) continue;
+    std::vector<std::size_t> stack{i};
+    r.component[i] = next;
+    while (!stack.empty()) {
+      const std::size_t a = stack.back();
+      stack.pop_back();
+      for (std::size_t b = 0; b < n; ++b)
+        if (r.core[b] && r.component[b] < 0 && close(a, b))
+          r.component[b] = next, stack.push_back(b);
+    }
+    ++next;
+  }
+  return r;
+}
+
+TEST_CASE("Dbscan: matches the definition, brute force", "[pipeline]") {
+  core::RngStream rng(5, "preprocess_radar_test/dbscan");
+  for (int trial = 0; trial < 5; ++trial) {
+    std::vector<float> xyz;
+    for (int c = 0; c < 6; ++c) {  // blobs of various sizes plus uniform clutter
+      const Eigen::Vector3d centre(rng.Uniform(0, 30), rng.Uniform(0, 30), rng.Uniform(0, 10));
+      const int n = 3 + static_cast<int>(rng.UniformInt(40));
+      for (int i = 0; i < n; ++i)
+        for (int k = 0; k < 3; ++k)
+          xyz.push_back(static_cast<float>(centre[k] + rng.Normal(0.0, 0.6)));
+    }
+    for (int i = 0; i < 80; ++i)
+      for (double hi : {30.0, 30.0, 10.0}) xyz.push_back(static_cast<float>(rng.Uniform(0.0, hi)));
+    const double eps = 1.0;
+    const int min_points = 4;
+    const Reference ref = BruteForce(xyz, eps, min_points);
+    const DbscanClusters got = Dbscan(xyz, 3, eps, min_points);
+    const std::size_t n = xyz.size() / 3;
+    REQUIRE(got.label.size() == n);
+    // Core points: the same partition (a bijection between component ids).
+    std::map<int, int> to_ref, from_ref;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!ref.core[i]) continue;
+      REQUIRE(got.label[i] >= 0);
+      const auto [a, a_new] = to_ref.emplace(got.label[i], ref.component[i]);
+      const auto [b, b_new] = from_ref.emplace(ref.component[i], got.label[i]);
+      CHECK(a->second == ref.component[i]);
+      CHECK(b->second == got.label[i]);
+    }
+    // Non-core points: noise unless within eps of a core point of their
+    // cluster.
+    for (std::size_t i = 0; i < n; ++i) {
+      if (ref.core[i]) continue;
+      bool reachable = false, joins_a_neighbour = false;
+      for (std::size_t j = 0; j < n; ++j) {
+        double d2 = 0.0;
+        for (int k = 0; k < 3; ++k)
+          d2 += (xyz[3 * i + k] - xyz[3 * j + k]) * (xyz[3 * i + k] - xyz[3 * j + k]);
+        if (ref.core[j] && d2 < eps * eps) {
+          reachable = true;
+          joins_a_neighbour = joins_a_neighbour || got.label[i] == got.label[j];
+        }
+      }
+      CHECK((got.label[i] >= 0) == reachable);
+      CHECK(joins_a_neighbour == reachable);
+    }
+    std::vector<std::size_t> sizes(got.size.size(), 0);
+    for (int l : got.label)
+      if (l >= 0) ++sizes[l];
+    CHECK(sizes == got.size);
+  }
+  CHECK(Dbscan({}, 3, 1.0, 1).label.empty());
+  CHECK_THROWS_WITH(Dbscan({1.0f, 2.0f}, 3, 1.0, 1), Catch::Contains("multiple of dims"));
+}
+
+TEST_CASE("LargestClusters and EvenlySpacedIndices", "[pipeline]") {
+  DbscanClusters c;
+  c.size = {5, 9, 5, 2, 9};
+  CHECK(LargestClusters(c, 1) == std::vector<int>{1});
+  CHECK(LargestClusters(c, 3) == std::vector<int>{1, 4, 0});
+  CHECK(LargestClusters(c, 10) == std::vector<int>{1, 4, 0, 2, 3});
+  CHECK(EvenlySpacedIndices(3, 5) == std::vector<std::size_t>{0, 1, 2});
+  CHECK(EvenlySpacedIndices(10, 4) == std::vector<std::size_t>{0, 2, 5, 7});
+}
+
+}  // namespace
+}  // namespace uavsim::pipeline
