@@ -48,37 +48,12 @@ std::string Ratio(const char* label, double x) {
   return s.str();
 }
 
-}  // namespace
-
-int BenchRaycast(bool quiet, std::ostream& out) {
-  const Scenario s;  // the default scenario
-  WorldModel world(s);
-  const double t_s = 10.0;
-  world.scene().SetTime(t_s);
-  const NodeConfig* cam_node = nullptr;
-  const NodeConfig* lidar_node = nullptr;
-  for (const auto& n : s.nodes) {
-    if (n.sensor.type == sensors::SensorType::kFisheyeStereo && !cam_node) cam_node = &n;
-    if (n.sensor.type == sensors::SensorType::kLidar && !lidar_node) lidar_node = &n;
-  }
-  sensors::FisheyeStereo camera(cam_node->sensor.fisheye, world.scene());
-  sensors::Lidar lidar(lidar_node->sensor.lidar, world.scene());
-  const core::WeatherConfig clear;
-
-  if (!quiet)
-    out << "default city: " << world.scene().static_triangle_count() << " static triangles, "
-        << world.scene().moving_object_count() << " moving objects; camera "
-        << cam_node->sensor.fisheye.width_px << "x" << cam_node->sensor.fisheye.height_px
-        << " stereo, LiDAR " << lidar.beams_per_frame() << " beams per sweep\n";
-  out << std::left << std::setw(46) << "measure" << std::right << std::setw(10) << "Mrays/s"
-      << "  note\n";
-
-  // Single-thread figures (global_control takes the smallest active limit, so
-  // this one must end before the 2-thread measurement).
-  auto one_thread =
-      std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, 1);
-
-  // Camera rays: raw single rays vs packets, then the full Capture.
+// Single-thread figures: camera rays raw vs packets vs the full Capture,
+// LiDAR rays raw vs the full sweep. (tbb's global_control takes the smallest
+// active limit, so this one must end before a 2-thread measurement.)
+void SingleThreadRays(std::ostream& out, WorldModel& world, sensors::FisheyeStereo& camera,
+                      sensors::Lidar& lidar, const Scenario& s, double t_s) {
+  tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
   const std::vector<sensors::Ray> cam_rays = camera.WorldRays(sensors::FisheyeStereo::Eye::kLeft);
   std::vector<sensors::RayHit> hits(cam_rays.size());
   const double raw_cam = cam_rays.size() / TimePerCall([&] {
@@ -98,7 +73,6 @@ int BenchRaycast(bool quiet, std::ostream& out) {
   const double cam_rate = camera.rays_per_frame() / capture_s;
   Row(out, "camera Capture, shaded (1 thread)", cam_rate, Ratio("of raw", cam_rate / raw_cam));
 
-  // LiDAR rays: raw single rays vs the full sweep.
   const std::vector<sensors::LidarBeam> beams = lidar.Beams(t_s);
   std::vector<sensors::RayHit> lhits(beams.size());
   const double raw_lidar = beams.size() / TimePerCall([&] {
@@ -111,12 +85,14 @@ int BenchRaycast(bool quiet, std::ostream& out) {
   const double lidar_rate = lidar.beams_per_frame() / sweep_s;
   Row(out, "LiDAR Capture, with time slices (1 thread)", lidar_rate,
       Ratio("of raw", lidar_rate / raw_lidar));
+}
 
-  one_thread.reset();
-
-  // One simulated second of the default camera + LiDAR load.
-  const double cam_hz = cam_node->sensor.timing().rate_hz,
-               lidar_hz = lidar_node->sensor.timing().rate_hz;
+// One simulated second of the default camera + LiDAR load, on 1 and 2 threads.
+void DefaultLoad(std::ostream& out, WorldModel& world, sensors::FisheyeStereo& camera,
+                 sensors::Lidar& lidar, const Scenario& s, double t_s, double cam_hz,
+                 double lidar_hz) {
+  core::RngStream noise(1, "bench/camera"), lnoise(1, "bench/lidar");
+  const double beams = static_cast<double>(lidar.Beams(t_s).size());
   for (int threads : {1, 2}) {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
     camera.set_max_threads(threads);
@@ -129,8 +105,36 @@ int BenchRaycast(bool quiet, std::ostream& out) {
     note << std::fixed << std::setprecision(2) << "real-time factor " << 1.0 / second_s << " with "
          << threads << " thread" << (threads > 1 ? "s" : "");
     Row(out, "camera + LiDAR, default rates",
-        (cam_hz * camera.rays_per_frame() + lidar_hz * beams.size()) / second_s, note.str());
+        (cam_hz * camera.rays_per_frame() + lidar_hz * beams) / second_s, note.str());
   }
+}
+
+}  // namespace
+
+int BenchRaycast(bool quiet, std::ostream& out) {
+  const Scenario s;  // the default scenario
+  WorldModel world(s);
+  const double t_s = 10.0;
+  world.scene().SetTime(t_s);
+  const NodeConfig* cam_node = nullptr;
+  const NodeConfig* lidar_node = nullptr;
+  for (const auto& n : s.nodes) {
+    if (n.sensor.type == sensors::SensorType::kFisheyeStereo && !cam_node) cam_node = &n;
+    if (n.sensor.type == sensors::SensorType::kLidar && !lidar_node) lidar_node = &n;
+  }
+  sensors::FisheyeStereo camera(cam_node->sensor.fisheye, world.scene());
+  sensors::Lidar lidar(lidar_node->sensor.lidar, world.scene());
+
+  if (!quiet)
+    out << "default city: " << world.scene().static_triangle_count() << " static triangles, "
+        << world.scene().moving_object_count() << " moving objects; camera "
+        << cam_node->sensor.fisheye.width_px << "x" << cam_node->sensor.fisheye.height_px
+        << " stereo, LiDAR " << lidar.beams_per_frame() << " beams per sweep\n";
+  out << std::left << std::setw(46) << "measure" << std::right << std::setw(10) << "Mrays/s"
+      << "  note\n";
+  SingleThreadRays(out, world, camera, lidar, s, t_s);
+  DefaultLoad(out, world, camera, lidar, s, t_s, cam_node->sensor.timing().rate_hz,
+              lidar_node->sensor.timing().rate_hz);
   return 0;
 }
 

@@ -212,6 +212,139 @@ std::vector<std::uint64_t> ReadSeeds(const SpecReader& r, const Json& j) {
   return seeds;
 }
 
+// The base scenario of a spec: a file (relative to the spec) or inline,
+// and where its paths resolve.
+struct BaseScenario {
+  Json json;
+  std::string file, dir;
+};
+
+BaseScenario ReadBaseScenario(const SpecReader& r, const Json& spec, const std::string& path,
+                              const std::string& spec_dir) {
+  if (!spec.contains("scenario")) r.Fail("", "missing \"scenario\" (a scenario file or object)");
+  BaseScenario base{Json(), path, spec_dir};
+  if (spec["scenario"].is_string()) {
+    const fs::path p =
+        (fs::path(spec_dir) / spec["scenario"].get<std::string>()).lexically_normal();
+    std::error_code ec;
+    if (!fs::is_regular_file(p, ec)) r.Fail("/scenario", "file not found: " + p.string());
+    base.file = p.string();
+    base.json = core::LoadJsonFile(base.file);
+    base.dir = p.parent_path().empty() ? "." : p.parent_path().string();
+  } else if (spec["scenario"].is_object()) {
+    base.json = spec["scenario"];
+  } else {
+    r.Fail("/scenario", "expected a scenario file's path or a scenario object, got " +
+                            core::DescribeValue(spec["scenario"]));
+  }
+  return base;
+}
+
+// Applies the spec's "set" to the base scenario; returns which spec
+// location set each scenario pointer (the blame list).
+std::vector<Assignment> ApplyFixedSets(const SpecReader& r, const Json& spec, Json& base) {
+  std::vector<Assignment> fixed;
+  if (!spec.contains("set")) return fixed;
+  if (!spec["set"].is_object()) r.Fail("/set", "expected an object of \"/json/pointer\": value");
+  for (const auto& [ptr, val] : spec["set"].items()) {
+    const std::string at = "/set/" + core::EscapePointerToken(ptr);
+    r.Pointer(Json(ptr), at);
+    try {
+      SetPointer(base, ptr, val);
+    } catch (const ConfigError& e) {
+      r.Fail(at, e.message());
+    }
+    fixed.push_back({ptr, at, at});
+  }
+  return fixed;
+}
+
+// The spec location to blame for a scenario error at `pointer`: the last
+// assignment that covers it, else the base scenario.
+std::string Blame(const std::vector<Assignment>& blame, const std::string& pointer) {
+  std::string at = "/scenario";
+  for (const Assignment& a : blame)
+    if (Covers(a.pointer, pointer)) at = a.Blame(pointer);
+  return at;
+}
+
+// One point of the grid: the parameters' values at `index` and `seed`,
+// applied to the base scenario and checked.
+SweepPointSpec MakePoint(const SpecReader& r, const SweepSpec& out, const BaseScenario& base,
+                         const std::vector<Assignment>& fixed,
+                         const std::vector<std::vector<std::string>>& value_pointers,
+                         const std::vector<int>& index, std::uint64_t seed, std::size_t point) {
+  SweepPointSpec pt;
+  char id[32];
+  std::snprintf(id, sizeof id, "p%04zu", point);
+  pt.id = id;
+  pt.value_index = index;
+  pt.seed = seed;
+  Json doc = base.json;
+  std::vector<Assignment> blame = fixed;
+  std::string what = "point " + pt.id + " (";
+  for (std::size_t k = 0; k < out.parameters.size(); ++k) {
+    const SweepValue& v = out.parameters[k].values[index[k]];
+    what += out.parameters[k].name + "=" + v.label + ", ";
+    for (const auto& [ptr, val] : v.set) {
+      const bool cases = out.parameters[k].pointer.empty();
+      const std::string at = cases
+                                 ? value_pointers[k][index[k]] + "/" + core::EscapePointerToken(ptr)
+                                 : value_pointers[k][index[k]];
+      const std::string key = cases ? at : "/parameters/" + std::to_string(k) + "/pointer";
+      try {
+        SetPointer(doc, ptr, val);
+      } catch (const ConfigError& e) {
+        r.Fail(key, "point " + pt.id + ": " + e.pointer() + ": " + e.message());
+      }
+      blame.push_back({ptr, at, key});
+    }
+  }
+  what += "seed=" + std::to_string(seed) + ")";
+  doc["seed"] = seed;
+  try {
+    pt.scenario = ScenarioFromJson(doc, base.file, base.dir);
+  } catch (const ConfigError& e) {
+    r.Fail(Blame(blame, e.pointer()), what + ": " + e.pointer() + ": " + e.message());
+  }
+  return pt;
+}
+
+// The grid: the parameters' values as an odometer (last fastest), then the
+// seeds; each point's scenario checked now, before anything runs.
+void BuildGrid(const SpecReader& r, SweepSpec& out, const BaseScenario& base,
+               const std::vector<Assignment>& fixed,
+               const std::vector<std::vector<std::string>>& value_pointers) {
+  double grid = static_cast<double>(out.seeds.size());
+  for (const auto& p : out.parameters) grid *= static_cast<double>(p.values.size());
+  if (grid > static_cast<double>(kMaxSweepPoints))
+    r.Fail("/parameters", "refused: the grid has " + core::FormatNumber(grid) +
+                              " points (at most " + std::to_string(kMaxSweepPoints) + ")");
+  std::vector<int> index(out.parameters.size(), 0);
+  std::size_t point = 0;
+  while (true) {
+    for (std::uint64_t seed : out.seeds)
+      out.points.push_back(MakePoint(r, out, base, fixed, value_pointers, index, seed, point++));
+    int k = static_cast<int>(out.parameters.size()) - 1;
+    while (k >= 0 && ++index[k] == static_cast<int>(out.parameters[k].values.size()))
+      index[k--] = 0;
+    if (k < 0) break;
+  }
+}
+
+std::string ReadSpecName(const SpecReader& r, const Json& spec, const std::string& path) {
+  const std::string name =
+      spec.contains("name") ? r.String(spec["name"], "/name") : fs::path(path).stem().string();
+  if (!ValidName(name))
+    r.Fail(spec.contains("name") ? "/name" : "",
+           spec.contains("name")
+               ? "expected letters, digits, '_' or '-' (it names the output folder)"
+               : "the file name \"" + name +
+                     "\" cannot name the output folder: give the spec a \"name\" of letters, "
+                     "digits, '_' or '-'");
+  return name;
+}
+
 }  // namespace
 
 SweepSpec LoadSweepSpec(const std::string& path) {
@@ -224,58 +357,13 @@ SweepSpec LoadSweepSpec(const std::string& path) {
     const std::string d = fs::path(path).parent_path().string();
     return d.empty() ? std::string(".") : d;
   }();
-  out.name =
-      spec.contains("name") ? r.String(spec["name"], "/name") : fs::path(path).stem().string();
-  if (!ValidName(out.name))
-    r.Fail(spec.contains("name") ? "/name" : "",
-           spec.contains("name")
-               ? "expected letters, digits, '_' or '-' (it names the output folder)"
-               : "the file name \"" + out.name +
-                     "\" cannot name the output folder: give the spec a \"name\" of letters, "
-                     "digits, '_' or '-'");
-
-  // The base scenario: a file (relative to the spec) or inline.
-  if (!spec.contains("scenario")) r.Fail("", "missing \"scenario\" (a scenario file or object)");
-  Json base;
-  std::string scenario_file = path, base_dir = spec_dir;
-  if (spec["scenario"].is_string()) {
-    const fs::path p =
-        (fs::path(spec_dir) / spec["scenario"].get<std::string>()).lexically_normal();
-    std::error_code ec;
-    if (!fs::is_regular_file(p, ec)) r.Fail("/scenario", "file not found: " + p.string());
-    scenario_file = p.string();
-    base = core::LoadJsonFile(scenario_file);
-    base_dir = p.parent_path().empty() ? "." : p.parent_path().string();
-  } else if (spec["scenario"].is_object()) {
-    base = spec["scenario"];
-  } else {
-    r.Fail("/scenario", "expected a scenario file's path or a scenario object, got " +
-                            core::DescribeValue(spec["scenario"]));
-  }
-
-  // Blame lists: which spec location set each scenario pointer.
-  std::vector<Assignment> fixed;
-  if (spec.contains("set")) {
-    if (!spec["set"].is_object()) r.Fail("/set", "expected an object of \"/json/pointer\": value");
-    for (const auto& [ptr, val] : spec["set"].items()) {
-      const std::string at = "/set/" + core::EscapePointerToken(ptr);
-      r.Pointer(Json(ptr), at);
-      try {
-        SetPointer(base, ptr, val);
-      } catch (const ConfigError& e) {
-        r.Fail(at, e.message());
-      }
-      fixed.push_back({ptr, at, at});
-    }
-  }
-  const std::string base_blame = "/scenario";
+  out.name = ReadSpecName(r, spec, path);
+  BaseScenario base = ReadBaseScenario(r, spec, path, spec_dir);
+  const std::vector<Assignment> fixed = ApplyFixedSets(r, spec, base.json);
   try {
-    out.base_resolved = ResolvedJson(ScenarioFromJson(base, scenario_file, base_dir));
+    out.base_resolved = ResolvedJson(ScenarioFromJson(base.json, base.file, base.dir));
   } catch (const ConfigError& e) {
-    std::string at = base_blame;
-    for (const Assignment& a : fixed)
-      if (Covers(a.pointer, e.pointer())) at = a.Blame(e.pointer());
-    r.Fail(at, "the base scenario: " + std::string(e.what()));
+    r.Fail(Blame(fixed, e.pointer()), "the base scenario: " + std::string(e.what()));
   }
 
   std::vector<std::vector<std::string>> value_pointers;
@@ -293,67 +381,11 @@ SweepSpec LoadSweepSpec(const std::string& path) {
   out.seeds = spec.contains("seeds")
                   ? ReadSeeds(r, spec["seeds"])
                   : std::vector<std::uint64_t>{out.base_resolved.at("seed").get<std::uint64_t>()};
-
-  double grid = static_cast<double>(out.seeds.size());
-  for (const auto& p : out.parameters) grid *= static_cast<double>(p.values.size());
-  if (grid > static_cast<double>(kMaxSweepPoints))
-    r.Fail("/parameters", "refused: the grid has " + core::FormatNumber(grid) +
-                              " points (at most " + std::to_string(kMaxSweepPoints) + ")");
-
-  // The grid: the parameters' values as an odometer (last fastest), then
-  // the seeds; each point's scenario checked now, before anything runs.
-  const std::size_t n_params = out.parameters.size();
-  std::vector<int> index(n_params, 0);
-  std::size_t point = 0;
-  while (true) {
-    for (std::uint64_t seed : out.seeds) {
-      SweepPointSpec pt;
-      char id[32];
-      std::snprintf(id, sizeof id, "p%04zu", point++);
-      pt.id = id;
-      pt.value_index = index;
-      pt.seed = seed;
-      Json doc = base;
-      std::vector<Assignment> blame = fixed;
-      std::string what = "point " + pt.id + " (";
-      for (std::size_t k = 0; k < n_params; ++k) {
-        const SweepValue& v = out.parameters[k].values[index[k]];
-        what += out.parameters[k].name + "=" + v.label + ", ";
-        for (const auto& [ptr, val] : v.set) {
-          const bool cases = out.parameters[k].pointer.empty();
-          const std::string at =
-              cases ? value_pointers[k][index[k]] + "/" + core::EscapePointerToken(ptr)
-                    : value_pointers[k][index[k]];
-          const std::string key = cases ? at : "/parameters/" + std::to_string(k) + "/pointer";
-          try {
-            SetPointer(doc, ptr, val);
-          } catch (const ConfigError& e) {
-            r.Fail(key, "point " + pt.id + ": " + e.pointer() + ": " + e.message());
-          }
-          blame.push_back({ptr, at, key});
-        }
-      }
-      what += "seed=" + std::to_string(seed) + ")";
-      doc["seed"] = seed;
-      try {
-        pt.scenario = ScenarioFromJson(doc, scenario_file, base_dir);
-      } catch (const ConfigError& e) {
-        std::string at = base_blame;
-        for (const Assignment& a : blame)
-          if (Covers(a.pointer, e.pointer())) at = a.Blame(e.pointer());
-        r.Fail(at, what + ": " + e.pointer() + ": " + e.message());
-      }
-      out.points.push_back(std::move(pt));
-    }
-    int k = static_cast<int>(n_params) - 1;
-    while (k >= 0 && ++index[k] == static_cast<int>(out.parameters[k].values.size()))
-      index[k--] = 0;
-    if (k < 0) break;
-  }
+  BuildGrid(r, out, base, fixed, value_pointers);
 
   out.canonical = spec;
   out.canonical["name"] = out.name;
-  out.canonical["scenario"] = base;
+  out.canonical["scenario"] = base.json;
   out.canonical.erase("set");
   out.canonical["seeds"] = out.seeds;
   return out;

@@ -74,4 +74,13 @@ bool WorldModel::Blocked(const Eigen::Vector3d& a_m, const Eigen::Vector3d& b_m)
   return scene_->Occluded(a_m, b_m, 1.0);
 }
 
+std::vector<sensors::BoundingSphere> WorldModel::SmallObjects(double t_s) const {
+  std::vector<sensors::BoundingSphere> spheres;
+  for (std::size_t i = 0; i < uav_count(); ++i)
+    spheres.push_back({uav(i).StateAt(t_s).position_m, uav_radius_m(i)});
+  for (std::size_t i = 0; i < bird_count(); ++i)
+    spheres.push_back({bird(i).StateAt(t_s).position_m, bird_radius_m(i)});
+  return spheres;
+}
+
 }  // namespace uavsim::sim

@@ -36,6 +36,9 @@ class WorldModel : public channel::PathOracle {
   std::size_t bird_count() const { return bird_trajectories_.size(); }
   const core::Trajectory& bird(std::size_t i) const { return *bird_trajectories_[i]; }
   double bird_radius_m(std::size_t i) const { return bird_radii_m_[i]; }
+  // The bounding spheres of everything that moves at t_s: the UAVs, then the
+  // birds (world ENU, metres).
+  std::vector<sensors::BoundingSphere> SmallObjects(double t_s) const;
 
   // PathOracle: blocked by anything in the scene (city, birds, other UAVs);
   // the segment's ends are trimmed by 1 m so the target's own body and the

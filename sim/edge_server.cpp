@@ -1,0 +1,171 @@
+#include "sim/edge_server.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+
+#include "pipeline/anchored/geometric_anchor.h"
+#include "pipeline/torch_runtime.h"
+
+namespace uavsim::sim {
+namespace {
+
+const char* const kModalities[] = {"camera", "lidar", "radar"};
+
+// The trained model a scenario names, loaded for the run loop. Throws
+// core::ConfigError naming the scenario's /pipeline/model when it is missing
+// or does not fit the scenario.
+std::unique_ptr<pipeline::UavLocModelFiles> LoadModel(const Scenario& s, const std::string& file,
+                                                      bool quiet, core::Json& info) {
+  namespace fs = std::filesystem;
+  const bool is_default = s.pipeline.model == "default";
+  const std::string path =
+      is_default ? pipeline::DefaultModelPath()
+                 : pipeline::ModelManifestPath(
+                       (fs::path(s.base_dir) / s.pipeline.model).lexically_normal().string());
+  const std::string how =
+      "train one with `uavsim train SCENARIO.json --out DIR` and set /pipeline/model to DIR";
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec))
+    throw core::ConfigError(file, "/pipeline/model", "no trained model at " + path + ": " + how);
+  std::unique_ptr<pipeline::UavLocModelFiles> model;
+  try {
+    model = pipeline::UavLocModelFiles::Load(path);
+  } catch (const core::ConfigError& e) {
+    throw core::ConfigError(file, "/pipeline/model", std::string(e.what()) + " (" + how + ")");
+  }
+  const pipeline::ModelManifest& m = model->manifest();
+  if (m.latent_dim != s.pipeline.latent_dim)
+    throw core::ConfigError(file, "/pipeline/latent_dim",
+                            "the model " + path + " sends latents of " +
+                                std::to_string(m.latent_dim) + " values, the scenario asks for " +
+                                std::to_string(s.pipeline.latent_dim) + ": " + how);
+  if (std::abs(m.window_s - s.pipeline.window_s) > 1e-12)
+    throw core::ConfigError(file, "/pipeline/window_s",
+                            "the model " + path + " was trained with " +
+                                core::FormatNumber(m.window_s) +
+                                " s windows, the scenario asks for " +
+                                core::FormatNumber(s.pipeline.window_s) + " s: " + how);
+  const bool same_layout = m.layout_hash == LayoutHash(s);
+  if (!same_layout && !quiet)
+    std::cerr << "uavsim: warning: the model " << path << " was trained for scenario \""
+              << m.scenario << "\" with another world or node layout; its estimates may be poor ("
+              << how << ")\n";
+  info = {{"path", path},
+          {"trained_for", m.scenario},
+          {"same_layout", same_layout},
+          {"head", model->edge().anchored() ? "anchored" : "paper"}};
+  return model;
+}
+
+// The EKF baseline with noises from the nodes' sensor configurations and the
+// target's limits.
+std::unique_ptr<pipeline::Ekf> MakeEkf(const Scenario& s) {
+  pipeline::EkfConfig config = s.pipeline.ekf;
+  config.max_speed_mps = s.uavs.front().trajectory.max_speed_mps;
+  config.max_accel_mps2 = s.uavs.front().trajectory.max_accel_mps2;
+  config.target_size_m = s.uavs.front().size_m;
+  auto ekf = std::make_unique<pipeline::Ekf>(config);
+  for (const NodeConfig& n : s.nodes) {
+    switch (n.sensor.type) {
+      case sensors::SensorType::kFisheyeStereo:
+        ekf->AddCamera(n.id, n.sensor.fisheye);
+        break;
+      case sensors::SensorType::kLidar:
+        ekf->AddLidar(n.id, n.sensor.lidar);
+        break;
+      case sensors::SensorType::kFmcwRadar:
+        ekf->AddRadar(n.id, n.sensor.radar);
+        break;
+    }
+  }
+  return ekf;
+}
+
+}  // namespace
+
+EdgeServer::EdgeServer(const Scenario& s, const std::string& scenario_file, bool quiet,
+                       bool methods)
+    : scenario_(s),
+      receiver_(s.pipeline.window_s, s.pipeline.late_allowance_s),
+      window_ns_(core::Seconds(s.pipeline.window_s)) {
+  if (!methods) return;
+  if (Runs("ekf")) ekf_ = MakeEkf(s);
+  const bool any_uavloc =
+      Runs("uavloc") || Runs("uavloc_camera") || Runs("uavloc_lidar") || Runs("uavloc_radar");
+  if (!any_uavloc) return;
+  pipeline::InitTorch(1, s.seed);
+  uavloc_ = LoadModel(s, scenario_file, quiet, model_info_);
+  uavloc_->edge().WaitForTrack(s.pipeline.uavloc_wait_for_track);
+  for (const char* m : kModalities)
+    if (const std::string method = std::string("uavloc_") + m; Runs(method))
+      ablations_[method] = {*core::ModalityFromName(m), uavloc_->LoadEdge()};
+}
+
+EdgeServer::~EdgeServer() = default;
+
+bool EdgeServer::Runs(const std::string& method) const {
+  const auto& methods = scenario_.pipeline.methods;
+  return std::find(methods.begin(), methods.end(), method) != methods.end();
+}
+
+const pipeline::NodeEncoder* EdgeServer::encoder(core::Modality m) const {
+  return uavloc_ ? &uavloc_->encoder(m) : nullptr;
+}
+
+std::uint32_t EdgeServer::MessageBytes(core::Modality m) const {
+  return channel::LatentMessageBytes(scenario_.pipeline.latent_dim) +
+         (uavloc_ && uavloc_->edge().anchored() ? pipeline::AnchorBytes(m) : 0);
+}
+
+std::vector<std::string> EdgeServer::SteeredMethods() const {
+  std::vector<std::string> steered;
+  if (uavloc_ && Runs("uavloc")) steered.push_back("uavloc");
+  if (ekf_) steered.push_back("ekf");
+  return steered;
+}
+
+bool EdgeServer::OnArrival(const channel::Message& m, core::SimTime t_arrival) {
+  if (!receiver_.OnArrival(m, t_arrival) || !m.content) return false;
+  const auto& content = *static_cast<const NodeContent*>(m.content.get());
+  if (ekf_ && content.camera) ekf_->Observe(content.node_id, *content.camera);
+  if (ekf_ && content.points) ekf_->Observe(content.node_id, *content.points);
+  if (uavloc_ && !content.latent.empty()) {
+    const std::int64_t k = m.t_capture_ns / window_ns_ + 1;
+    pipeline::WindowInputs& w = pending_[k];
+    w.window = k;
+    w.frames[static_cast<int>(m.modality)].push_back(
+        {core::ToSeconds(m.t_capture_ns), content.latent,
+         content.camera ? pipeline::AnchorOf(*content.camera)
+                        : pipeline::AnchorOf(*content.points)});
+  }
+  return true;
+}
+
+std::map<std::string, Eigen::Vector3d> EdgeServer::EstimateWindow(std::int64_t tick, double t_s) {
+  std::map<std::string, Eigen::Vector3d> estimated;
+  if (uavloc_) {
+    const std::int64_t k = tick + 1;
+    pipeline::WindowInputs inputs;
+    inputs.window = k;
+    if (auto it = pending_.find(k); it != pending_.end()) inputs = std::move(it->second);
+    // Windows up to k are done (an arrival stamped exactly at a passed
+    // deadline would otherwise linger).
+    pending_.erase(pending_.begin(), pending_.upper_bound(k));
+    for (auto& [method, ablation] : ablations_) {
+      pipeline::WindowInputs one;
+      one.window = k;
+      const int m = static_cast<int>(ablation.first);
+      one.frames[m] = inputs.frames[m];
+      if (const auto p = ablation.second->OnWindow(one)) estimated[method] = *p;
+    }
+    if (Runs("uavloc"))
+      if (const auto p = uavloc_->edge().OnWindow(inputs)) estimated["uavloc"] = *p;
+  }
+  if (ekf_)
+    if (const auto p = ekf_->EstimateAt(t_s)) estimated["ekf"] = *p;
+  return estimated;
+}
+
+}  // namespace uavsim::sim

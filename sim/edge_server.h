@@ -1,0 +1,88 @@
+// The edge server as the run wires it (DESIGN.md: channel/uplink ->
+// pipeline/edge): it accounts for every message the nodes send (delivered,
+// late, lost: channel/edge_receiver.h), hands what arrives on time to each
+// localization method, and at each alignment window's deadline asks every
+// method for its estimate of the target at the window's end.
+//
+// Methods (/pipeline/methods): `ekf` (pipeline/baselines/) fuses the
+// pre-processed measurements as they arrive; `uavloc` runs the trained
+// model's edge network (pipeline/edge/) on the IB-CC latents of each window;
+// `uavloc_camera`, `uavloc_lidar`, `uavloc_radar` run another copy of it on
+// one modality's latents, each with its own track state.
+//
+// Determinism: no randomness of its own; LibTorch is seeded from the
+// scenario's seed when a model is loaded.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "channel/edge_receiver.h"
+#include "channel/packet.h"
+#include "pipeline/baselines/ekf.h"
+#include "pipeline/edge/edge_localizer.h"
+#include "pipeline/edge/te_align.h"
+#include "pipeline/model_bundle.h"
+#include "pipeline/node/node_encoder.h"
+#include "sim/core/json_io.h"
+#include "sim/scenario.h"
+#include "sim/sensing_node.h"
+
+namespace uavsim::sim {
+
+class EdgeServer {
+ public:
+  // Builds the scenario's methods. With `methods` false (training-data
+  // collection) no method runs and no model is loaded: the server only
+  // accounts. Throws core::ConfigError naming `scenario_file` and
+  // /pipeline/model (or /pipeline/latent_dim, /pipeline/window_s) when the
+  // model is missing or does not fit the scenario; warns on stderr (unless
+  // quiet) when it was trained for another world or node layout.
+  EdgeServer(const Scenario& scenario, const std::string& scenario_file, bool quiet, bool methods);
+  ~EdgeServer();
+
+  // The uplinks' side (the nodes report what they send to receiver()
+  // directly). OnArrival feeds the methods and returns whether the
+  // message arrived on time with content (late ones count as missing).
+  bool OnArrival(const channel::Message& m, core::SimTime t_arrival);
+  void OnLost(const channel::Message& m) { receiver_.OnLost(m); }
+
+  // At the deadline of window k = tick + 1, whose end is t_s: each method's
+  // estimate of the target (world ENU, metres), absent where it has none yet.
+  std::map<std::string, Eigen::Vector3d> EstimateWindow(std::int64_t tick, double t_s);
+
+  channel::EdgeReceiver& receiver() { return receiver_; }
+  const channel::EdgeReceiver& receiver() const { return receiver_; }
+  // The IB-CC encoder the nodes of modality m run (null without a model).
+  const pipeline::NodeEncoder* encoder(core::Modality m) const;
+  // Bytes of a node's message that carries something: the latent and its
+  // header, plus the geometric anchor for an anchored model.
+  std::uint32_t MessageBytes(core::Modality m) const;
+  // The methods whose estimates steer a beam (the single-modality
+  // ablations steer none), in the order the downlink scores them.
+  std::vector<std::string> SteeredMethods() const;
+  // metrics.json's "uavloc_model" (path, trained_for, same_layout, head);
+  // null without a model.
+  const core::Json& model_info() const { return model_info_; }
+
+ private:
+  bool Runs(const std::string& method) const;
+
+  const Scenario& scenario_;
+  channel::EdgeReceiver receiver_;
+  core::SimTime window_ns_;
+  std::unique_ptr<pipeline::Ekf> ekf_;
+  std::unique_ptr<pipeline::UavLocModelFiles> uavloc_;
+  core::Json model_info_;
+  // Single-modality ablations: method -> (its modality, its edge network).
+  std::map<std::string, std::pair<core::Modality, std::unique_ptr<pipeline::EdgeLocalizer>>>
+      ablations_;
+  std::map<std::int64_t, pipeline::WindowInputs> pending_;  // window k -> latents arrived
+};
+
+}  // namespace uavsim::sim

@@ -1,0 +1,37 @@
+// Writes a finished run's directory (DESIGN.md's output contract):
+// truth.csv, estimates.csv, rate_snr.csv and its plot, metrics.json and
+// manifest.json, then commits the directory (all-or-nothing: nothing
+// appears under the final name before Commit).
+#pragma once
+
+#include <map>
+#include <string>
+
+#include "results/csv.h"
+#include "results/run_directory.h"
+#include "sim/edge_server.h"
+#include "sim/run.h"
+#include "sim/scenario.h"
+#include "sim/sensing_node.h"
+#include "sim/window_scorer.h"
+
+namespace uavsim::sim {
+
+// What a finished run hands to the writer.
+struct FinishedRun {
+  const Scenario& scenario;
+  const RunOptions& options;
+  const RunSummary& summary;
+  std::string started_utc;
+  const results::CsvTable& truth;
+  const WindowScorer& scores;
+  const EdgeServer& edge;
+  std::map<std::string, NodeTraffic> traffic;  // per modality: camera, lidar, radar
+};
+
+// Writes every file of the run into `dir`'s staging folder and commits it.
+// Throws std::runtime_error for I/O; warns on stderr (unless quiet) when
+// gnuplot cannot draw rate_snr.png.
+void WriteRunDirectory(results::RunDirectory& dir, const FinishedRun& run);
+
+}  // namespace uavsim::sim

@@ -1,0 +1,195 @@
+#include "sim/sensing_node.h"
+
+#include <stdexcept>
+#include <utility>
+
+#include "pipeline/node/camera_preprocessor.h"
+#include "pipeline/node/lidar_preprocessor.h"
+#include "pipeline/node/radar_preprocessor.h"
+#include "sensors/fisheye_stereo.h"
+#include "sensors/fmcw_radar.h"
+#include "sensors/lidar.h"
+#include "sensors/radar_processor.h"
+#include "sim/recorder.h"
+#include "sim/world_model.h"
+
+namespace uavsim::sim {
+namespace {
+
+class CameraNodeSensor final : public NodeSensor {
+ public:
+  CameraNodeSensor(const NodeConfig& node, const Scenario& s, WorldModel& world, Recorder* recorder)
+      : id_(node.id),
+        weather_(s.weather),
+        world_(world),
+        recorder_(recorder),
+        camera_(node.sensor.fisheye, world.scene()),
+        preprocess_(node.sensor.fisheye, s.pipeline.preprocess) {
+    camera_.set_small_objects([&world](double t_s) { return world.SmallObjects(t_s); });
+  }
+
+ private:
+  NodeFrame DoCapture(double t_s, core::RngStream& noise) override {
+    world_.scene().SetTime(t_s);
+    const sensors::StereoFrame frame = camera_.Capture(t_s, weather_, noise);
+    if (recorder_) recorder_->RecordCamera(id_, frame);
+    NodeFrame out;
+    out.raw_bytes = frame.RawBytes();
+    out.content.camera = preprocess_.Process(frame);
+    return out;
+  }
+
+  const std::string& id_;
+  const core::WeatherConfig& weather_;
+  WorldModel& world_;
+  Recorder* recorder_;
+  sensors::FisheyeStereo camera_;
+  pipeline::CameraPreprocessor preprocess_;
+};
+
+class LidarNodeSensor final : public NodeSensor {
+ public:
+  LidarNodeSensor(const NodeConfig& node, const Scenario& s, WorldModel& world, Recorder* recorder)
+      : id_(node.id),
+        weather_(s.weather),
+        recorder_(recorder),
+        lidar_(node.sensor.lidar, world.scene()),
+        preprocess_(node.sensor.lidar, s.pipeline.preprocess) {}
+
+ private:
+  // The LiDAR poses the scene at each point's own time.
+  NodeFrame DoCapture(double t_s, core::RngStream& noise) override {
+    const sensors::PointCloudFrame frame = lidar_.Capture(t_s, weather_, noise);
+    if (recorder_) recorder_->RecordLidar(id_, frame);
+    NodeFrame out;
+    out.raw_bytes = frame.RawBytes();
+    out.content.points = preprocess_.Process(frame);
+    return out;
+  }
+
+  const std::string& id_;
+  const core::WeatherConfig& weather_;
+  Recorder* recorder_;
+  sensors::Lidar lidar_;
+  pipeline::LidarPreprocessor preprocess_;
+};
+
+class RadarNodeSensor final : public NodeSensor {
+ public:
+  RadarNodeSensor(const NodeConfig& node, const Scenario& s, WorldModel& world, Recorder* recorder)
+      : id_(node.id),
+        weather_(s.weather),
+        world_(world),
+        recorder_(recorder),
+        radar_(node.sensor.radar, world.scene()),
+        processor_(node.sensor.radar),
+        preprocess_(node.sensor.radar, s.pipeline.preprocess) {}
+
+ private:
+  // The node's radar front end: IF cube, range-Doppler, CFAR, angles
+  // (sensors/radar_processor.h), then the node's clustering.
+  NodeFrame DoCapture(double t_s, core::RngStream& noise) override {
+    world_.scene().SetTime(t_s);
+    const sensors::RadarCube cube =
+        radar_.Synthesize(radar_.FindScatterers(t_s, world_.SmallObjects(t_s)), weather_, noise);
+    const sensors::RadarFrame frame = processor_.Process(cube, radar_.X_WR(), t_s);
+    if (recorder_) recorder_->RecordRadar(id_, frame);
+    NodeFrame out;
+    out.raw_bytes = cube.RawBytes();
+    out.content.points = preprocess_.Process(frame);
+    return out;
+  }
+
+  const std::string& id_;
+  const core::WeatherConfig& weather_;
+  WorldModel& world_;
+  Recorder* recorder_;
+  sensors::FmcwRadar radar_;
+  sensors::RadarProcessor processor_;
+  pipeline::RadarPreprocessor preprocess_;
+};
+
+}  // namespace
+
+bool NodeContent::FoundSomething() const {
+  return (camera && camera->detected) || (points && points->count() > 0);
+}
+
+std::uint64_t NodeContent::PreprocessedBytes() const {
+  if (!FoundSomething()) return 0;  // nothing to send
+  if (camera)
+    return 2ull * pipeline::CameraObservation::kCropPx * pipeline::CameraObservation::kCropPx + 64;
+  if (points) return 4ull * points->values.size();
+  return 0;
+}
+
+NodeFrame NodeSensor::Capture(double t_s, core::RngStream& noise) {
+  NodeFrame frame = DoCapture(t_s, noise);
+  if (frame.raw_bytes == 0) throw std::logic_error("a sensor produced a frame of no raw data");
+  if (frame.content.camera.has_value() == frame.content.points.has_value())
+    throw std::logic_error("a node's pre-processing gave neither or both observation kinds");
+  return frame;
+}
+
+std::unique_ptr<NodeSensor> MakeNodeSensor(const NodeConfig& node, const Scenario& scenario,
+                                           WorldModel& world, Recorder* recorder) {
+  const char* modality = node.sensor.modality();
+  Recorder* records = recorder && recorder->Wants(modality) ? recorder : nullptr;
+  switch (node.sensor.type) {
+    case sensors::SensorType::kFisheyeStereo:
+      return std::make_unique<CameraNodeSensor>(node, scenario, world, records);
+    case sensors::SensorType::kLidar:
+      return std::make_unique<LidarNodeSensor>(node, scenario, world, records);
+    case sensors::SensorType::kFmcwRadar:
+      return std::make_unique<RadarNodeSensor>(node, scenario, world, records);
+  }
+  throw std::logic_error("unknown sensor type");
+}
+
+SensingNode::SensingNode(const NodeConfig& config, std::uint32_t index,
+                         std::unique_ptr<NodeSensor> sensor, const Scenario& scenario,
+                         Wiring wiring)
+    : config_(config),
+      index_(index),
+      modality_(*core::ModalityFromName(config.sensor.modality())),
+      sensor_(std::move(sensor)),
+      wiring_(std::move(wiring)),
+      noise_(scenario.seed, "node/" + config.id + "/noise"),
+      clock_(config.sensor.timing().rate_hz, config.sensor.timing().phase_s,
+             config.sensor.timing().clock_jitter_s,
+             core::RngStream(scenario.seed, "node/" + config.id + "/clock"),
+             [this](std::int64_t, core::SimTime t) { OnFrame(t); }) {}
+
+void SensingNode::Start(core::Simulator& sim, core::SimTime t_end) { clock_.Start(sim, 0, t_end); }
+
+void SensingNode::OnFrame(core::SimTime t) {
+  const double t_s = core::ToSeconds(t);
+  NodeFrame frame = sensor_->Capture(t_s, noise_);
+  auto content = std::make_shared<NodeContent>(std::move(frame.content));
+  content->node_id = config_.id;
+  // The node sends its latent when it found something, else a bare header
+  // ("nothing seen").
+  const bool found = content->FoundSomething();
+  if (found && wiring_.encoder)
+    content->latent = content->camera ? wiring_.encoder->Encode(*content->camera)
+                                      : wiring_.encoder->Encode(*content->points);
+  if (found && wiring_.observer) wiring_.observer(*this, t_s, *content);
+  // The latent travels, not the crops: the edge's filter needs the geometry only.
+  if (content->camera) content->camera->crop_left.clear(), content->camera->crop_right.clear();
+  const std::uint32_t bytes_sent = found ? wiring_.message_bytes : channel::kMessageHeaderBytes;
+  ++traffic_.frames;
+  traffic_.raw_bytes += frame.raw_bytes;
+  traffic_.preprocessed_bytes += content->PreprocessedBytes();
+  traffic_.compressed_bytes += bytes_sent;
+  channel::Message m;
+  m.node = index_;
+  m.modality = modality_;
+  m.sequence = sequence_++;
+  m.t_capture_ns = t;
+  m.payload_bytes = bytes_sent;
+  m.content = std::move(content);
+  wiring_.receiver->OnSent(m);
+  wiring_.link->Send(std::move(m));
+}
+
+}  // namespace uavsim::sim

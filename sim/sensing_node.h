@@ -1,0 +1,124 @@
+// A sensing node as the run wires it (DESIGN.md: sensors -> pipeline/node ->
+// channel/uplink): at each tick of its own frame clock the node's sensor
+// captures the world, the node pre-processes the frame (pipeline/node/),
+// encodes what it found with its modality's IB-CC encoder when a model runs,
+// and sends one message on its uplink.
+//
+// Determinism: a node draws sensor noise from its own stream
+// "node/<id>/noise" and clock jitter from "node/<id>/clock"; its frames are
+// numbered 0, 1, 2, ... in capture order.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "channel/edge_receiver.h"
+#include "channel/packet.h"
+#include "channel/uplink.h"
+#include "pipeline/node/node_encoder.h"
+#include "pipeline/node/observations.h"
+#include "sim/core/periodic_process.h"
+#include "sim/core/rng.h"
+#include "sim/core/simulator.h"
+#include "sim/scenario.h"
+
+namespace uavsim::sim {
+
+class Recorder;
+class WorldModel;
+
+// What a node's message carries besides its size, opaque to the channel:
+// the pre-processed measurement (for the edge's classical filter and the
+// anchored head's anchors) and the IB-CC latent.
+struct NodeContent {
+  std::string node_id;
+  std::optional<pipeline::CameraObservation> camera;
+  std::optional<pipeline::PointObservation> points;
+  std::vector<float> latent;  // the IB-CC mu, when a model runs and something was found
+  std::size_t sample = 0;     // set by a training collector: the frame's sample index
+
+  // Whether pre-processing found anything to send.
+  bool FoundSomething() const;
+  // Bytes of the pre-processed observation: the two ROI crops at 8 bits
+  // plus their geometry, or the points as float32; 0 when nothing was found.
+  std::uint64_t PreprocessedBytes() const;
+};
+
+// A sensor behind one interface: Capture poses the world at t_s, captures,
+// records the raw frame when the run records this modality, and
+// pre-processes it. The public method keeps the checks; each sensor's work
+// is its private DoCapture (ns-3's CalcRxPower / DoCalcRxPower).
+struct NodeFrame {
+  std::uint64_t raw_bytes = 0;  // the raw frame (or radar cube) as the sensor produced it
+  NodeContent content;          // its pre-processed content
+};
+
+class NodeSensor {
+ public:
+  virtual ~NodeSensor() = default;
+  // Throws std::logic_error if the sensor produced no raw data.
+  NodeFrame Capture(double t_s, core::RngStream& noise);
+
+ private:
+  virtual NodeFrame DoCapture(double t_s, core::RngStream& noise) = 0;
+};
+
+// The node's sensor for its configuration: the stereo fisheye camera, the
+// LiDAR or the FMCW radar with the node's pre-processing. `recorder` may be
+// null (nothing recorded); `world` outlives the sensor.
+std::unique_ptr<NodeSensor> MakeNodeSensor(const NodeConfig& node, const Scenario& scenario,
+                                           WorldModel& world, Recorder* recorder);
+
+// Bytes per modality over a run: the data-rate table (paper Table II).
+struct NodeTraffic {
+  std::uint64_t frames = 0;
+  std::uint64_t raw_bytes = 0;
+  std::uint64_t preprocessed_bytes = 0;
+  std::uint64_t compressed_bytes = 0;  // what the uplink carried (headers included)
+};
+
+class SensingNode {
+ public:
+  // Called with each frame's content after encoding, before it is sent (a
+  // training collector tags it); may be empty.
+  using FrameObserver = std::function<void(const SensingNode&, double t_s, NodeContent&)>;
+  struct Wiring {
+    channel::Uplink* link = nullptr;                 // where the messages go
+    channel::EdgeReceiver* receiver = nullptr;       // the edge's accounting of what was sent
+    const pipeline::NodeEncoder* encoder = nullptr;  // null: no latent (no model runs)
+    std::uint32_t message_bytes = 0;  // a message that carries something (header included)
+    FrameObserver observer;
+  };
+
+  // `index`: the node's position in the scenario's node list.
+  SensingNode(const NodeConfig& config, std::uint32_t index, std::unique_ptr<NodeSensor> sensor,
+              const Scenario& scenario, Wiring wiring);
+
+  // Starts the frame clock: frames at the sensor's rate, phase and clock
+  // jitter over [0, t_end].
+  void Start(core::Simulator& sim, core::SimTime t_end);
+
+  const NodeConfig& config() const { return config_; }
+  std::uint32_t index() const { return index_; }
+  core::Modality modality() const { return modality_; }
+  const NodeTraffic& traffic() const { return traffic_; }
+
+ private:
+  void OnFrame(core::SimTime t);
+
+  const NodeConfig& config_;
+  std::uint32_t index_;
+  core::Modality modality_;
+  std::unique_ptr<NodeSensor> sensor_;
+  Wiring wiring_;
+  core::RngStream noise_;
+  std::uint64_t sequence_ = 0;
+  NodeTraffic traffic_;
+  core::PeriodicProcess clock_;
+};
+
+}  // namespace uavsim::sim

@@ -1,0 +1,52 @@
+#include "sim/window_scorer.h"
+
+#include <utility>
+
+#include "channel/rain_attenuation.h"
+
+namespace uavsim::sim {
+namespace {
+
+channel::DownlinkScorer MakeDownlink(const Scenario& s, std::vector<std::string> steered) {
+  const double rain_db_per_km = channel::RainSpecificAttenuationDbPerKm(
+      s.base_station.carrier_ghz, s.weather.rain_mm_h, channel::Polarization::kVertical, 0.0);
+  return channel::DownlinkScorer(
+      s.base_station, rain_db_per_km, std::move(steered),
+      channel::SnrGridDb(s.outputs.snr_db.from, s.outputs.snr_db.to, s.outputs.snr_db.step),
+      core::RngStream(s.seed, "base_station/downlink"));
+}
+
+}  // namespace
+
+WindowScorer::WindowScorer(const Scenario& scenario, std::vector<std::string> steered)
+    : scenario_(scenario),
+      steered_(steered),
+      downlink_(MakeDownlink(scenario, std::move(steered))) {}
+
+void WindowScorer::Score(double t_s, const Eigen::Vector3d& truth_m,
+                         const std::map<std::string, Eigen::Vector3d>& estimated,
+                         WorldModel& world) {
+  ++windows_;
+  for (const auto& [method, p] : estimated) {
+    using results::FormatFixed;
+    estimates_.AddRow({FormatFixed(t_s, 6), method, FormatFixed(p.x(), 6), FormatFixed(p.y(), 6),
+                       FormatFixed(p.z(), 6)});
+    rmse_[method].Add(p - truth_m);
+  }
+  const std::size_t methods = scenario_.pipeline.methods.size();
+  if (methods >= 2 && estimated.size() == methods)
+    for (const auto& [method, p] : estimated) rmse_common_[method].Add(p - truth_m);
+  world.scene().SetTime(t_s);
+  std::map<std::string, Eigen::Vector3d> steering;  // the ablations steer no beam
+  for (const std::string& beam : steered_)
+    if (auto it = estimated.find(beam); it != estimated.end()) steering.insert(*it);
+  downlink_.AddWindow(truth_m, steering, world);
+}
+
+std::map<std::string, RmseAccumulator> WindowScorer::rmse() const {
+  std::map<std::string, RmseAccumulator> all = rmse_;
+  for (const std::string& method : scenario_.pipeline.methods) all[method];
+  return all;
+}
+
+}  // namespace uavsim::sim

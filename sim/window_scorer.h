@@ -1,0 +1,60 @@
+// Scores each alignment window of a run (DESIGN.md: pipeline/edge ->
+// channel/beam -> results): every method's estimate against the truth at
+// the window's end (estimates.csv rows, RMSE over the windows it estimated
+// and over the windows every method estimated), and the base station's
+// downlink steered at each estimate (rate_snr.csv; channel/beamformer.h). A
+// method scores beam gain 0 in windows where it has no estimate yet.
+//
+// Determinism: the downlink draws from its own stream "base_station/downlink".
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "channel/beamformer.h"
+#include "results/csv.h"
+#include "sim/scenario.h"
+#include "sim/world_model.h"
+
+namespace uavsim::sim {
+
+// Root mean square of Euclidean errors.
+struct RmseAccumulator {
+  double sum_sq = 0.0;
+  std::size_t count = 0;
+  void Add(const Eigen::Vector3d& error) { sum_sq += error.squaredNorm(), ++count; }
+  double value() const { return count ? std::sqrt(sum_sq / static_cast<double>(count)) : 0.0; }
+};
+
+class WindowScorer {
+ public:
+  // `steered`: the methods whose estimates steer a beam.
+  WindowScorer(const Scenario& scenario, std::vector<std::string> steered);
+
+  // One window ending at t_s with the target at truth_m; `estimated`:
+  // method -> estimate (world ENU, metres). Poses `world` at t_s for the
+  // downlink's blockage and reflections.
+  void Score(double t_s, const Eigen::Vector3d& truth_m,
+             const std::map<std::string, Eigen::Vector3d>& estimated, WorldModel& world);
+
+  std::uint64_t windows() const { return windows_; }
+  const results::CsvTable& estimates() const { return estimates_; }
+  const channel::DownlinkScorer& downlink() const { return downlink_; }
+  // Per method that ran (every /pipeline/methods entry, estimated or not).
+  std::map<std::string, RmseAccumulator> rmse() const;
+  // Per method over the windows every method estimated (two or more methods).
+  const std::map<std::string, RmseAccumulator>& rmse_common() const { return rmse_common_; }
+
+ private:
+  const Scenario& scenario_;
+  std::vector<std::string> steered_;
+  channel::DownlinkScorer downlink_;
+  results::CsvTable estimates_{{"t_s", "method", "x_m", "y_m", "z_m"}};
+  std::map<std::string, RmseAccumulator> rmse_, rmse_common_;
+  std::uint64_t windows_ = 0;
+};
+
+}  // namespace uavsim::sim
