@@ -595,21 +595,22 @@ void Ekf::Predict(Track& track, double t_s) const {
     for (int i = 0; i < n; ++i)
       for (int j = 0; j < n; ++j)
         rates(i, j) = (i == j ? -1.0 : 1.0 / (n - 1)) / modes_[i].sojourn_s;
-    track.imm.Mix((rates * dt).exp(),
-                  [this](const std::vector<Imm9::Mode>& prior, std::size_t i, std::size_t j) {
-                    Imm9::Mode source = prior[i];
-                    // A CV mode has no acceleration of its own: mixed into a CA mode it
-                    // borrows that mode's acceleration statistics (Granstrom, Willett &
-                    // Bar-Shalom 2015, unequal-dimension mixing) instead of claiming a = 0
-                    // with certainty, which would shrink the CA mode's acceleration variance.
-                    if (modes_[j].constant_acceleration && !modes_[i].constant_acceleration) {
-                      source.x.tail<3>() = prior[j].x.tail<3>();
-                      source.P.topRightCorner<6, 3>().setZero();
-                      source.P.bottomLeftCorner<3, 6>().setZero();
-                      source.P.bottomRightCorner<3, 3>() = prior[j].P.bottomRightCorner<3, 3>();
-                    }
-                    return source;
-                  });
+    // A CV mode has no acceleration of its own: mixed into a CA mode it
+    // borrows that mode's acceleration statistics (Granstrom, Willett &
+    // Bar-Shalom 2015, unequal-dimension mixing) instead of claiming a = 0
+    // with certainty, which would shrink the CA mode's acceleration variance.
+    const auto source_of = [this](const std::vector<Imm9::Mode>& prior, std::size_t i,
+                                  std::size_t j) {
+      Imm9::Mode source = prior[i];
+      if (modes_[j].constant_acceleration && !modes_[i].constant_acceleration) {
+        source.x.tail<3>() = prior[j].x.tail<3>();
+        source.P.topRightCorner<6, 3>().setZero();
+        source.P.bottomLeftCorner<3, 6>().setZero();
+        source.P.bottomRightCorner<3, 3>() = prior[j].P.bottomRightCorner<3, 3>();
+      }
+      return source;
+    };
+    track.imm.Mix((rates * dt).exp(), source_of);
   }
   for (int j = 0; j < n; ++j)
     PredictMode(modes_[j].constant_acceleration, modes_[j].psd, dt, track.imm.modes()[j].x,
