@@ -180,7 +180,7 @@ bool AnchorFilter::Update(const Measure& measure, const Eigen::Matrix<double, N,
     if (innovation.dot(llt.solve(innovation)) > kGate[N]) return false;
   }
   // Each mode's Kalman update (Joseph form) and its log-likelihood (IMM
-  // step 4): -d^2/2 - log det(2 pi S)/2. Committed once every mode's is.
+  // step 3): -d^2/2 - log det(2 pi S)/2. Committed once every mode's is.
   std::vector<Imm10::Mode> updated = imm_.modes();
   std::vector<double> log_likelihood(updated.size());
   for (std::size_t j = 0; j < updated.size(); ++j) {

@@ -9,11 +9,12 @@
 // transition matrix, the motion models (it predicts each mode in modes()),
 // the measurement updates (it updates each mode in modes()) and the modes'
 // measurement log-likelihoods. One cycle, in Sec. 11.6.6's steps:
-//   1-2. Mix(pi): the mixing probabilities and the mixed initial conditions
-//        (the filter then predicts every mode, and updates every mode with
-//        a measurement, giving each mode's likelihood Lambda_j);
+//   1-2. Mix(pi): the mixing probabilities and the mixed initial conditions;
+//   3.   (the filter) mode-matched filtering: it predicts every mode, and
+//        updates every mode with a measurement, giving each mode's
+//        likelihood Lambda_j = N(y_j; 0, S_j);
 //   4.   UpdateProbabilities(log Lambda): the mode probabilities;
-//   5.   Combined(): the moment-matched estimate, for output only.
+//   5.   Combined(): the moment-matched estimate (the modes stay as they are).
 // The equations are on the methods, one line each.
 //
 // Units: those of the filter's state (x_j) and their squares (P_j);
@@ -22,11 +23,12 @@
 // Throws std::invalid_argument, naming the sizes, for an empty set of modes
 // or a transition matrix or likelihood vector whose size is not the number
 // of modes. Nothing else is checked: pi's rows are taken as given (a
-// stochastic matrix keeps sum_j mu_j = 1), and a mode with mu_j = 0 that
-// receives no weight in Mix divides 0 by 0, as the equations do.
-// Deterministic: no randomness, and sums run over the modes in index order
-// (mode 0 first), in exactly the operations written on each method, so a
-// filter that moved its own IMM code here kept its results bit for bit.
+// stochastic matrix keeps sum_j mu_j = 1), and a mode j that no probability
+// flows into (cbar_j = 0) divides 0 by 0 in Mix, as the equations do.
+// Deterministic: no randomness; sums run over the modes in index order
+// (mode 0 first) with exactly the operations written on each method. That
+// order is part of the contract: the filters' outputs (estimates.csv) depend
+// on it to the last bit.
 // Thread safety: none (plain value type, copyable).
 #pragma once
 
