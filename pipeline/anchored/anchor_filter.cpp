@@ -6,28 +6,31 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "sim/core/physical_constants.h"
+
 namespace uavsim::pipeline {
 
 namespace {
 
 // chi-square quantiles at 0.99 for 1 to 4 degrees of freedom.
 constexpr double kGate[] = {0.0, 6.635, 9.210, 11.345, 13.277};
-constexpr double kPi = 3.14159265358979323846;
+using core::kPi;
 
 }  // namespace
 
 AnchorFilter::AnchorFilter(Motion motion) : motion_(motion) {
   switch (motion) {
     case Motion::kCv:
-      modes_ = {Mode{Model::kCv}};
+      models_ = {Model::kCv};
       break;
     case Motion::kCa:
-      modes_ = {Mode{Model::kCa}};
+      models_ = {Model::kCa};
       break;
     case Motion::kImm:
-      modes_ = {Mode{Model::kCt, 0.5}, Mode{Model::kCv, 0.5}};
+      models_ = {Model::kCt, Model::kCv};
       break;
   }
+  imm_ = Imm10(std::vector<double>(models_.size(), 1.0 / static_cast<double>(models_.size())));
 }
 
 namespace {
@@ -118,38 +121,28 @@ void AnchorFilter::PredictTo(double t_s) {
   if (dt <= 0.0) return;
   // IMM mixing (Bar-Shalom et al. Sec. 11.6.6, steps 1-2): the switch
   // probability over dt of a Markov chain leaving a mode at 1/kModeSwitch_s.
-  const std::size_t n = modes_.size();
+  const std::size_t n = imm_.size();
   if (n > 1) {
     const double leave = 1.0 - std::exp(-dt / kModeSwitch_s);
-    const auto pi = [&](std::size_t i, std::size_t j) {
-      return i == j ? 1.0 - leave : leave / static_cast<double>(n - 1);
-    };
-    std::vector<Mode> mixed = modes_;
-    for (std::size_t j = 0; j < n; ++j) {
-      double c = 0.0;
-      for (std::size_t i = 0; i < n; ++i) c += pi(i, j) * modes_[i].probability;
-      Vector10d x = Vector10d::Zero();
-      for (std::size_t i = 0; i < n; ++i) x += pi(i, j) * modes_[i].probability / c * modes_[i].x;
-      Matrix10d p = Matrix10d::Zero();
-      for (std::size_t i = 0; i < n; ++i) {
-        const Vector10d d = modes_[i].x - x;
-        p += pi(i, j) * modes_[i].probability / c * (modes_[i].p + d * d.transpose());
-      }
-      mixed[j].probability = c, mixed[j].x = x, mixed[j].p = p;
-    }
-    modes_ = std::move(mixed);
+    Eigen::MatrixXd pi(n, n);
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::size_t j = 0; j < n; ++j)
+        pi(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) =
+            i == j ? 1.0 - leave : leave / static_cast<double>(n - 1);
+    imm_.Mix(pi);
   }
-  for (Mode& mode : modes_) {
+  for (std::size_t j = 0; j < n; ++j) {
+    Imm10::Mode& mode = imm_.modes()[j];
     Matrix10d f, q;
     Vector10d next;
-    if (mode.model == Model::kCt) {
+    if (models_[j] == Model::kCt) {
       CoordinatedTurn(mode.x, dt, next, f);
       q = PerAxis(WhiteAcceleration(kTurnAccelPsd, dt), false);
       q(9, 9) = kTurnRatePsd * dt;
     } else {
       Eigen::Matrix3d f3 = Eigen::Matrix3d::Identity(), q3;
       f3(0, 1) = dt;
-      if (mode.model == Model::kCv) {
+      if (models_[j] == Model::kCv) {
         f3(2, 2) = 0.0;  // a stays 0
         q3 = WhiteAcceleration(kAccelPsd, dt);
       } else {
@@ -164,20 +157,16 @@ void AnchorFilter::PredictTo(double t_s) {
       next = f * mode.x;
     }
     mode.x = next;
-    mode.p = f * mode.p * f.transpose() + q;
+    mode.P = f * mode.P * f.transpose() + q;
   }
   t_s_ = t_s;
   Combine();
 }
 
 void AnchorFilter::Combine() {
-  x_.setZero();
-  for (const Mode& mode : modes_) x_ += mode.probability * mode.x;
-  p_.setZero();
-  for (const Mode& mode : modes_) {
-    const Vector10d d = mode.x - x_;
-    p_ += mode.probability * (mode.p + d * d.transpose());
-  }
+  const Imm10::Mode combined = imm_.Combined();
+  x_ = combined.x;
+  p_ = combined.P;
 }
 
 template <int N, class Measure>
@@ -191,31 +180,25 @@ bool AnchorFilter::Update(const Measure& measure, const Eigen::Matrix<double, N,
     if (innovation.dot(llt.solve(innovation)) > kGate[N]) return false;
   }
   // Each mode's Kalman update (Joseph form) and its log-likelihood (IMM
-  // step 4): -d^2/2 - log det(2 pi S)/2. Committed once every mode's is.
-  std::vector<Mode> updated = modes_;
-  std::vector<double> log_likelihood(modes_.size());
-  for (std::size_t j = 0; j < modes_.size(); ++j) {
-    Mode& mode = updated[j];
+  // step 3): -d^2/2 - log det(2 pi S)/2. Committed once every mode's is.
+  std::vector<Imm10::Mode> updated = imm_.modes();
+  std::vector<double> log_likelihood(updated.size());
+  for (std::size_t j = 0; j < updated.size(); ++j) {
+    Imm10::Mode& mode = updated[j];
     const auto [innovation, h] = measure(mode.x);
-    const Eigen::LLT<MatrixN> llt(h * mode.p * h.transpose() + noise);
+    const Eigen::LLT<MatrixN> llt(h * mode.P * h.transpose() + noise);
     if (llt.info() != Eigen::Success) return false;
     const VectorN solved = llt.solve(innovation);
-    const Eigen::Matrix<double, 10, N> k = llt.solve(h * mode.p).transpose();  // P H^T S^-1
+    const Eigen::Matrix<double, 10, N> k = llt.solve(h * mode.P).transpose();  // P H^T S^-1
     mode.x += k * innovation;
     const Matrix10d a = Matrix10d::Identity() - k * h;
-    mode.p = a * mode.p * a.transpose() + k * noise * k.transpose();
+    mode.P = a * mode.P * a.transpose() + k * noise * k.transpose();
     const MatrixN l = llt.matrixL();
     log_likelihood[j] = -0.5 * innovation.dot(solved) - l.diagonal().array().log().sum() -
                         0.5 * N * std::log(2.0 * kPi);
   }
-  modes_ = std::move(updated);
-  // The modes' probabilities (IMM step 5), normalised from the largest.
-  const double top = *std::max_element(log_likelihood.begin(), log_likelihood.end());
-  double total = 0.0;
-  for (std::size_t j = 0; j < modes_.size(); ++j)
-    total += modes_[j].probability *= std::exp(log_likelihood[j] - top);
-  if (total > 0.0)
-    for (Mode& mode : modes_) mode.probability /= total;
+  imm_.modes() = std::move(updated);
+  imm_.UpdateProbabilities(log_likelihood);  // IMM step 4
   Combine();
   return true;
 }
@@ -245,26 +228,26 @@ void AnchorFilter::Start(const Eigen::Vector3d& p, double t_s, const GeometricAn
     v_cov = v_cov * (Eigen::Matrix3d::Identity() - along) +
             kRangeRateSigma_mps * kRangeRateSigma_mps * along;
   }
-  for (Mode& mode : modes_) {
-    mode.probability = 1.0 / static_cast<double>(modes_.size());
-    mode.x.setZero();
-    mode.x.head<3>() = start;
-    mode.x.segment<3>(3) = v;
-    mode.p.setZero();
-    mode.p.topLeftCorner<3, 3>() = p_cov;
-    mode.p.block<3, 3>(3, 3) = v_cov;
-    if (motion_ == Motion::kCa)
-      mode.p.diagonal().segment<3>(6).setConstant(kStartAccelSigma_mps2 * kStartAccelSigma_mps2);
-    if (motion_ == Motion::kImm) mode.p(9, 9) = kStartTurnSigma_rps * kStartTurnSigma_rps;
-  }
+  Imm10::Mode mode;
+  mode.x.setZero();
+  mode.x.head<3>() = start;
+  mode.x.segment<3>(3) = v;
+  mode.P.setZero();
+  mode.P.topLeftCorner<3, 3>() = p_cov;
+  mode.P.block<3, 3>(3, 3) = v_cov;
+  if (motion_ == Motion::kCa)
+    mode.P.diagonal().segment<3>(6).setConstant(kStartAccelSigma_mps2 * kStartAccelSigma_mps2);
+  if (motion_ == Motion::kImm) mode.P(9, 9) = kStartTurnSigma_rps * kStartTurnSigma_rps;
+  const std::size_t n = models_.size();
+  imm_.Reset(mode, std::vector<double>(n, 1.0 / static_cast<double>(n)));
   Combine();
 }
 
 std::optional<double> AnchorFilter::TurnProbability() const {
   if (!started_) return std::nullopt;
   double p = 0.0;
-  for (const Mode& mode : modes_)
-    if (mode.model == Model::kCt) p += mode.probability;
+  for (std::size_t j = 0; j < models_.size(); ++j)
+    if (models_[j] == Model::kCt) p += imm_.probabilities()[j];
   return p;
 }
 

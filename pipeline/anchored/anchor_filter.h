@@ -1,10 +1,9 @@
 // A Kalman filter over the geometric anchors (pipeline/anchored/anchors.h): the
-// edge's filtered candidate for an anchored UAVLoc model. A LiDAR or radar
-// fix carried to the window's deadline on its own is 0.22 m off (median, the
-// best of the six single-fix candidates, training episodes) where every fix
-// filtered together is 0.13 m off (NOTES.md 2026-11-22 (6)). Uses only what
-// the nodes send with their latents: the camera's ray, the LiDAR centroid,
-// the radar cluster's centroid, mean range and mean radial velocity.
+// edge's filtered candidate for an anchored UAVLoc model, every fix filtered
+// together where the other candidates carry one fix each to the window's
+// deadline. Uses only what the nodes send with their latents: the camera's
+// ray, the LiDAR centroid, the radar cluster's centroid, mean range and mean
+// radial velocity.
 //
 // State, world ENU, SI: x = [p, v, a, omega] (Bar-Shalom, Li & Kirubarajan
 // 2001, Secs. 6.2-6.3 and 11.7), with per-axis blocks of [p, v, a]:
@@ -18,16 +17,17 @@
 //     p_xy += [sin(w dt)  -(1 - cos(w dt)); 1 - cos(w dt)  sin(w dt)] v_xy / w,
 //     v_xy  = [cos -sin; sin cos](w dt) v_xy,  p_z += v_z dt,
 //     Q the constant-velocity Q with q_a on [p, v] plus q_w dt on omega
-//   interacting multiple model (Motion::kImm, the tracker's; Sec. 11.6.6):
-//     a quiet coordinated turn (steady flight: an orbit, a lap of a figure
-//     eight) and a manoeuvring constant velocity, switching at the rate
-//     1 / kModeSwitch_s; each mode its own Kalman filter on the common state,
-//     mixed before each prediction and weighted by its measurements'
-//     likelihoods after each update; the estimate is their mixture.
-//     Between ranging fixes only the rays see the target, so the range
-//     along the ray runs on the model: the constant-acceleration track's
-//     RMSE is 0.30 m on the default run and 0.48 m on 40 training episodes
-//     (dry), the IMM's 0.11 and 0.37 m (NOTES.md 2026-11-22 (7)).
+//   interacting multiple model (Motion::kImm, the tracker's; Sec. 11.6.6;
+//     pipeline/tracking/imm.h does its mixing, mode probabilities and
+//     combination): a quiet coordinated turn (steady flight: an orbit, a lap
+//     of a figure eight) and a manoeuvring constant velocity, each mode its
+//     own Kalman filter on the common state, mixed before each prediction
+//     with the switch probability 1 - exp(-dt / kModeSwitch_s) over dt, and
+//     weighted after each update by its measurement's likelihood
+//       log Lambda_j = -d^2 / 2 - log det(2 pi S) / 2  (d^2 = y^T S^-1 y);
+//     the estimate is their moment-matched mixture; a start gives each mode
+//     probability 1/2. Between ranging fixes only the rays see the target,
+//     so the range along the ray runs on the model.
 // Measurements at their capture times, linear in the state but for the
 // radial velocity:
 //   ray (o, d)   E^T (p - o) = 0, E = [e1 e2] orthonormal, normal to d;
@@ -45,8 +45,7 @@
 // its noise, or at two radar fixes that do and agree with each other (their
 // crossings of the ray), at the second with the radar's noise and its
 // radial velocity: not on the ray, which may be up to
-// RayGate::kGateMaxAge_s old (a radar start on a 0.33 s old ray was 2.9 m
-// off and lost the track for 2 s, NOTES.md 2026-11-22 (7)). A LiDAR fix
+// RayGate::kGateMaxAge_s old. A LiDAR fix
 // that agrees with the ray but not with the track restarts it
 // (kMaxLidarRejections); after kMaxRejections ranging fixes in a row
 // outside the gate, radar fixes that agree with the ray are held to confirm
@@ -63,6 +62,7 @@
 
 #include "pipeline/anchored/geometric_anchor.h"
 #include "pipeline/node/observations.h"
+#include "pipeline/tracking/imm.h"
 
 namespace uavsim::pipeline {
 
@@ -92,11 +92,9 @@ class AnchorFilter {
   // with one mode each: 0); nothing before a start.
   std::optional<double> TurnProbability() const;
 
-  // Noises: near the anchors' errors measured on training episodes (ray 2
-  // mrad rms, correlated from frame to frame; LiDAR centroid 0.17-0.20 m per
-  // axis; radar range 0.06 m, angles 0.03 rad), then the best of a few
-  // settings by the track's error on them (NOTES.md 2026-11-22 (6); the
-  // IMM's q_a, q_w, switching time and its CV mode's q likewise, (7)). The
+  // Noises: near the anchors' errors measured on training episodes, then
+  // the best of a few settings by the track's error on them, as are the
+  // IMM's q_a, q_w, switching time and its CV mode's q (NOTES.md). The
   // quiet turn's q_a is 0.005 m^2/s^3: its velocity wanders by
   // sqrt(q_a t) = 0.1 m/s in 2 s between fixes.
   static constexpr double kAccelPsd = 2.0;              // CV: q, m^2/s^3
@@ -133,13 +131,7 @@ class AnchorFilter {
   using Vector10d = Eigen::Matrix<double, 10, 1>;
   using Matrix10d = Eigen::Matrix<double, 10, 10>;
   enum class Model { kCv, kCa, kCt };
-  // One Kalman filter of the (IMM's) bank.
-  struct Mode {
-    Model model = Model::kCv;
-    double probability = 1.0;
-    Vector10d x = Vector10d::Zero();  // [p, v, a, omega]
-    Matrix10d p = Matrix10d::Identity();
-  };
+  using Imm10 = Imm<10>;  // x = [p, v, a, omega]
 
   void PredictTo(double t_s);
   // Mixes the modes' estimates into the one the filter reports.
@@ -159,7 +151,8 @@ class AnchorFilter {
   int rejections_ = 0;
   int lidar_rejections_ = 0;  // in a row
   Motion motion_;
-  std::vector<Mode> modes_;
+  std::vector<Model> models_;        // each mode's motion model, in imm_'s order
+  Imm10 imm_;                        // the bank of Kalman filters: one mode each
   Vector10d x_ = Vector10d::Zero();  // the mixture
   Matrix10d p_ = Matrix10d::Identity();
   std::optional<GeometricAnchor> ray_;                         // the latest camera ray

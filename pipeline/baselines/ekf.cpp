@@ -11,6 +11,8 @@
 #include <unsupported/Eigen/MatrixFunctions>
 #include <utility>
 
+#include "sim/core/physical_constants.h"
+
 namespace uavsim::pipeline {
 namespace {
 
@@ -19,9 +21,10 @@ using Eigen::MatrixXd;
 using Eigen::Vector3d;
 using Eigen::VectorXd;
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kSpeedOfLight_mps = 299792458.0;
-constexpr double kDegToRad = kPi / 180.0;
+using core::kDegToRad;
+using core::kPi;
+using core::kSpeedOfLight_mps;
+
 // A radar frame's strongest detections used; a UAV at tens of metres spans a
 // few range cells, so more are clutter the clustering kept, and the stacked
 // update costs the cube of their number.
@@ -527,7 +530,7 @@ void Ekf::AdvanceHorizon(double t_s) {
 }
 
 void Ekf::Start(Track& track, const TrackStart& start, double t_s) const {
-  Mode mode;
+  Imm9::Mode mode;
   mode.x.setZero();
   mode.x.head<3>() = start.position_m;
   mode.x.segment<3>(3) = start.velocity_mps;
@@ -536,12 +539,12 @@ void Ekf::Start(Track& track, const TrackStart& start, double t_s) const {
   mode.P.block<3, 3>(3, 3) = start.velocity_cov;
   mode.P.bottomRightCorner<3, 3>() =
       config_.max_accel_mps2 * config_.max_accel_mps2 / 3.0 * Matrix3d::Identity();
-  track.modes.assign(modes_.size(), mode);
   // The chain's stationary distribution: each mode in proportion to its sojourn.
   double total_s = 0.0;
   for (const ModeModel& mm : modes_) total_s += mm.sojourn_s;
-  track.mu.clear();
-  for (const ModeModel& mm : modes_) track.mu.push_back(mm.sojourn_s / total_s);
+  std::vector<double> mu;
+  for (const ModeModel& mm : modes_) mu.push_back(mm.sojourn_s / total_s);
+  track.imm.Reset(mode, std::move(mu));
   track.initialized = true;
   track.confirmed = false;
   track.rejections = 0;
@@ -586,63 +589,34 @@ void Ekf::Predict(Track& track, double t_s) const {
   if (!(dt > 0.0)) return;
   const int n = static_cast<int>(modes_.size());
   if (n > 1) {
-    // Mixing (IMM step 1) with Pi(dt) = exp(Lambda dt): leaving mode i at rate
-    // 1 / sojourn_i for any other mode alike.
+    // Mixing (IMM steps 1-2) with Pi(dt) = exp(Lambda dt): leaving mode i at
+    // rate 1 / sojourn_i for any other mode alike.
     Eigen::MatrixXd rates = Eigen::MatrixXd::Zero(n, n);
     for (int i = 0; i < n; ++i)
       for (int j = 0; j < n; ++j)
         rates(i, j) = (i == j ? -1.0 : 1.0 / (n - 1)) / modes_[i].sojourn_s;
-    const Eigen::MatrixXd Pi = (rates * dt).exp();
-    const Eigen::VectorXd mu = Eigen::Map<const Eigen::VectorXd>(track.mu.data(), n);
-    const Eigen::VectorXd c = Pi.transpose() * mu;
-    std::vector<Mode> mixed(n);
-    for (int j = 0; j < n; ++j) {
-      std::vector<Mode> sources = track.modes;
-      if (modes_[j].constant_acceleration) {
-        // A CV mode has no acceleration of its own: mixed into a CA mode it
-        // borrows that mode's acceleration statistics (Granstrom, Willett &
-        // Bar-Shalom 2015, unequal-dimension mixing) instead of claiming a = 0
-        // with certainty, which would shrink the CA mode's acceleration variance.
-        for (int i = 0; i < n; ++i) {
-          if (modes_[i].constant_acceleration) continue;
-          sources[i].x.tail<3>() = track.modes[j].x.tail<3>();
-          sources[i].P.topRightCorner<6, 3>().setZero();
-          sources[i].P.bottomLeftCorner<3, 6>().setZero();
-          sources[i].P.bottomRightCorner<3, 3>() = track.modes[j].P.bottomRightCorner<3, 3>();
-        }
+    // A CV mode has no acceleration of its own: mixed into a CA mode it
+    // borrows that mode's acceleration statistics (Granstrom, Willett &
+    // Bar-Shalom 2015, unequal-dimension mixing) instead of claiming a = 0
+    // with certainty, which would shrink the CA mode's acceleration variance.
+    const auto source_of = [this](const std::vector<Imm9::Mode>& prior, std::size_t i,
+                                  std::size_t j) {
+      Imm9::Mode source = prior[i];
+      if (modes_[j].constant_acceleration && !modes_[i].constant_acceleration) {
+        source.x.tail<3>() = prior[j].x.tail<3>();
+        source.P.topRightCorner<6, 3>().setZero();
+        source.P.bottomLeftCorner<3, 6>().setZero();
+        source.P.bottomRightCorner<3, 3>() = prior[j].P.bottomRightCorner<3, 3>();
       }
-      Vector9d x = Vector9d::Zero();
-      for (int i = 0; i < n; ++i) x += Pi(i, j) * mu(i) / c(j) * sources[i].x;
-      Matrix9d P = Matrix9d::Zero();
-      for (int i = 0; i < n; ++i) {
-        const Vector9d d = sources[i].x - x;
-        P += Pi(i, j) * mu(i) / c(j) * (sources[i].P + d * d.transpose());
-      }
-      mixed[j] = {x, P};
-    }
-    track.modes = std::move(mixed);
-    for (int j = 0; j < n; ++j) track.mu[j] = c(j);
+      return source;
+    };
+    track.imm.Mix((rates * dt).exp(), source_of);
   }
   for (int j = 0; j < n; ++j)
-    PredictMode(modes_[j].constant_acceleration, modes_[j].psd, dt, track.modes[j].x,
-                track.modes[j].P);
+    PredictMode(modes_[j].constant_acceleration, modes_[j].psd, dt, track.imm.modes()[j].x,
+                track.imm.modes()[j].P);
   track.t_s = t_s;
 }
-
-namespace {
-
-void CombinedMoments(const std::vector<Vector9d>& xs, const std::vector<Matrix9d>& Ps,
-                     const std::vector<double>& mu, Vector9d& x, Matrix9d& P) {
-  x.setZero();
-  for (std::size_t j = 0; j < xs.size(); ++j) x += mu[j] * xs[j];
-  P.setZero();
-  for (std::size_t j = 0; j < xs.size(); ++j) {
-    const Vector9d d = xs[j] - x;
-    P += mu[j] * (Ps[j] + d * d.transpose());
-  }
-}
-
-}  // namespace
 
 void Ekf::Apply(Tracks& tracks, const Measurement& m, EkfNodeStats* stats) const {
   Track& main = tracks.main;
@@ -710,15 +684,9 @@ int Ekf::Update(Track& track_in, const Measurement& m, EkfNodeStats* stats) cons
   Track track = track_in;
   Predict(track, m.t_s);
 
-  std::vector<Vector9d> xs;
-  std::vector<Matrix9d> Ps;
-  for (const Mode& mode : track.modes) {
-    xs.push_back(mode.x);
-    Ps.push_back(mode.P);
-  }
-  Vector9d x_bar;
-  Matrix9d P_bar;
-  CombinedMoments(xs, Ps, track.mu, x_bar, P_bar);
+  const Imm9::Mode combined = track.imm.Combined();
+  const Vector9d& x_bar = combined.x;
+  const Matrix9d& P_bar = combined.P;
 
   std::vector<std::size_t> accepted;
   for (std::size_t k = 0; k < m.components.size(); ++k) {
@@ -741,9 +709,9 @@ int Ekf::Update(Track& track_in, const Measurement& m, EkfNodeStats* stats) cons
   }
   if (accepted.empty()) return 0;
 
-  std::vector<double> log_likelihood(track.modes.size(), 0.0);
-  for (std::size_t j = 0; j < track.modes.size(); ++j) {
-    Mode& mode = track.modes[j];
+  std::vector<double> log_likelihood(track.imm.size(), 0.0);
+  for (std::size_t j = 0; j < track.imm.size(); ++j) {
+    Imm9::Mode& mode = track.imm.modes()[j];
     std::vector<Linearization> parts;
     int dim = 0;
     for (std::size_t k : accepted) {
@@ -779,15 +747,7 @@ int Ekf::Update(Track& track_in, const Measurement& m, EkfNodeStats* stats) cons
     log_likelihood[j] = -0.5 * (y.dot(ldlt.solve(y)) + ldlt.vectorD().array().log().sum() +
                                 dim * std::log(2.0 * kPi));
   }
-  if (track.modes.size() > 1) {
-    const double best = *std::max_element(log_likelihood.begin(), log_likelihood.end());
-    if (std::isfinite(best)) {
-      double total = 0.0;
-      for (std::size_t j = 0; j < track.modes.size(); ++j)
-        total += track.mu[j] *= std::exp(log_likelihood[j] - best);
-      for (double& mu : track.mu) mu /= total;
-    }
-  }
+  if (track.imm.size() > 1) track.imm.UpdateProbabilities(log_likelihood);
   track.t_last_update_s = m.t_s;
   if (m.start) track.t_last_anchor_s = m.t_s;
   track_in = std::move(track);
@@ -795,22 +755,16 @@ int Ekf::Update(Track& track_in, const Measurement& m, EkfNodeStats* stats) cons
 }
 
 EkfEstimate Ekf::Combine(const Track& track, double t_s) const {
-  std::vector<Vector9d> xs;
-  std::vector<Matrix9d> Ps;
-  for (const Mode& mode : track.modes) {
-    xs.push_back(mode.x);
-    Ps.push_back(mode.P);
-  }
-  Vector9d x;
-  Matrix9d P;
-  CombinedMoments(xs, Ps, track.mu, x, P);
+  const Imm9::Mode combined = track.imm.Combined();
+  const Vector9d& x = combined.x;
+  const Matrix9d& P = combined.P;
   EkfEstimate e;
   e.t_s = t_s;
   e.position_m = x.head<3>();
   e.velocity_mps = x.segment<3>(3);
   e.covariance = P.topLeftCorner<6, 6>();
   e.time_since_update_s = t_s - track.t_last_update_s;
-  e.mode_probabilities = track.mu;
+  e.mode_probabilities = track.imm.probabilities();
   return e;
 }
 
@@ -829,8 +783,8 @@ std::optional<EkfEstimate> Ekf::StateAt(double t_s) {
   } else {
     // Backwards: the means only, along each mode's own motion.
     const double dt = t_eff - track.t_s;
-    for (std::size_t j = 0; j < track.modes.size(); ++j) {
-      Vector9d& x = track.modes[j].x;
+    for (std::size_t j = 0; j < track.imm.size(); ++j) {
+      Vector9d& x = track.imm.modes()[j].x;
       const bool ca = modes_[j].constant_acceleration;
       x.head<3>() += dt * x.segment<3>(3) + (ca ? 0.5 * dt * dt : 0.0) * x.tail<3>();
       if (ca) x.segment<3>(3) += dt * x.tail<3>();

@@ -25,15 +25,19 @@
 //            (0.3: a stop-and-go's acceleration steps), CA mode, for smooth
 //            turns, q_j = (imm_ca_jerk_fraction a_max)^2 / T (0.1: an orbit's
 //            centripetal acceleration, 6 m/s on 25 m, turns at 0.35 m/s^3).
-//   The defaults minimise the fused RMSE over simulated orbit, figure-8,
-//   random and waypoint trajectories ("[tuning]" in tests/pipeline/baselines/ekf_test.cpp).
-//   IMM (Blom & Bar-Shalom 1988): mode switches are a continuous-time Markov
-//   chain leaving mode i at rate 1 / sojourn_i, so over any dt
-//   Pi(dt) = exp(Lambda dt) exactly (asynchronous updates need no fixed
-//   step); mixing, mode-matched EKF updates, mode probabilities from the
-//   innovation likelihoods; the output is the moment-matched mixture. Mixed
-//   into the CA mode, the CV mode borrows the CA mode's acceleration
-//   (Granstrom, Willett & Bar-Shalom 2015).
+//   The defaults come from the process-noise sweep "[tuning]" in
+//   tests/pipeline/baselines/ekf_test.cpp.
+//   IMM (Blom & Bar-Shalom 1988; pipeline/tracking/imm.h does its mixing,
+//   mode probabilities and combination): mode switches are a continuous-time
+//   Markov chain leaving mode i at rate 1 / sojourn_i (for any other mode alike), so
+//   over any dt Pi(dt) = exp(Lambda dt) exactly (asynchronous updates need
+//   no fixed step); mixing, mode-matched EKF updates, mode probabilities
+//   from the innovation likelihoods
+//     log Lambda_j = -(y^T S^-1 y + log det S + dim log 2 pi) / 2;
+//   the output is the moment-matched mixture. Mixed into the CA mode, the CV
+//   mode borrows the CA mode's acceleration (Granstrom, Willett &
+//   Bar-Shalom 2015). A track starts in the chain's stationary distribution,
+//   mu_i = sojourn_i / sum_l sojourn_l.
 //
 // Measurements, each applied at its own timestamp tau (predict to tau, then
 // update; Joseph-form covariance update):
@@ -47,10 +51,8 @@
 //       per-point         S1 = (nu S0 + (N - 1) S) / (nu + N - 1)   (S: sample covariance)
 //       centroid          Cov = S1 / N + lidar_floor_m^2 I
 //     nu = lidar_prior_points. A point lies on the target whatever the scan
-//     spacing (the spacing sets N, which is counted); measured against the
-//     real LiDAR model on the default geometry, a scan-spacing term made the
-//     spinning LiDAR's NIS 0.25, this model gives 0.9-1.0 (spinning) and
-//     1.2-1.4 (rosette, whose points come in runs along a petal).
+//     spacing (the spacing sets N, which is counted): the model has no
+//     scan-spacing term.
 //   Radar (PointObservation, 5 channels; t_s the frame's start, so the
 //     detections are applied at t_s + N_chirps T_c / 2, the chirps' middle):
 //     each detection d = R_WR^T (p - s) in the radar frame
@@ -70,9 +72,7 @@
 //       elevation) through u_y = cos el sin az, u_z = sin el,
 //     plus a per-frame error common to all of a frame's detections,
 //     diag(radar_range_floor_m, radar_angle_floor_deg x2, radar_velocity_floor_mps)^2.
-//     (Measured on the real chain at 30-55 m, snr 5-9 dB: range 0.06-0.08 m,
-//     angles 2-4 deg, velocity 0.04-0.1 m/s rms; the model gives 0.05 m,
-//     2.6-3.3 deg, 0.06 m/s.) A frame's gated detections (its 16 strongest
+//     A frame's gated detections (its 16 strongest
 //     at most) are one stacked update whose noise has the common part in
 //     every cross block. Azimuth innovations wrap to (-pi, pi]; velocity
 //     innovations to the unambiguous interval +-lambda / (4 T_c).
@@ -95,10 +95,7 @@
 //     is common to both eyes and only the match error
 //     (camera_disparity_sigma_px, both image axes) is the right eye's own:
 //       Cov = [C, C; C, C + D].
-//     (Measured on the real chain: 0.16 px centre error, correlated from
-//     frame to frame (lag-1 0.5), whose white-noise equivalent is the
-//     default 0.25 px; 0.2 px match error.) Depth error of the
-//     triangulation: sigma_Z ~ Z^2 sigma_angle sqrt(2) / b.
+//     Depth error of the triangulation: sigma_Z ~ Z^2 sigma_angle sqrt(2) / b.
 //
 // Gating: each component (a LiDAR fix, a camera pair, one radar detection)
 // is tested against the combined prediction: accepted when
@@ -156,6 +153,7 @@
 
 #include "pipeline/baselines/ekf_config.h"
 #include "pipeline/node/observations.h"
+#include "pipeline/tracking/imm.h"
 #include "sensors/fisheye_stereo_config.h"
 #include "sensors/fmcw_radar_config.h"
 #include "sensors/lidar_config.h"
@@ -256,10 +254,7 @@ class Ekf {
     Eigen::MatrixXd common_noise;  // empty: independent components
     std::optional<TrackStart> start;
   };
-  struct Mode {
-    Vector9d x = Vector9d::Zero();
-    Matrix9d P = Matrix9d::Identity();
-  };
+  using Imm9 = Imm<9>;
   struct Track {
     bool initialized = false;
     bool confirmed = false;  // a ranging measurement has been accepted since the start
@@ -268,8 +263,7 @@ class Ekf {
     double t_s = 0.0;
     double t_last_update_s = 0.0;  // last accepted update
     double t_last_anchor_s = 0.0;  // last accepted ranging measurement
-    std::vector<Mode> modes;
-    std::vector<double> mu;
+    Imm9 imm;                      // the modes' estimates and probabilities, in modes_'s order
   };
   enum class NodeKind { kCamera, kLidar, kRadar, kPosition };
   struct Node {
