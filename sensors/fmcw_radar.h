@@ -69,12 +69,9 @@
 //     metal             gamma -15 dB; |Gamma0|^2 = 1 (conductor), m = 0.1.
 //     vegetation        gamma -10 dB, no lobe (foliage is a volume scatterer).
 //     drone             gamma -5 dB, no lobe: sigma = 0.32 x the projected
-//                       area; 0.03-0.045 m^2 for the default 0.5 x 0.5 x 0.2 m
-//                       quadrotor from any aspect the tests try (small
-//                       multirotors: 0.01-0.1 m^2 at 77 GHz).
-//     bird              gamma -7 dB: 0.001-0.01 m^2 for 0.3-0.9 m wingspans
-//                       seen from below or the side; a small bird head-on
-//                       and level shows less (1e-4 m^2).
+//                       area (small multirotors: 0.01-0.1 m^2 at 77 GHz).
+//     bird              gamma -7 dB, no lobe: chosen for 0.001-0.01 m^2 from
+//                       0.3-0.9 m wingspans seen from below or the side.
 // - Velocity: RaycastScene::PointVelocity of the hit point at t_s (zero for
 //   the static world).
 // - Merging: hits are summed in power within cells of merge_cell_fraction
@@ -83,10 +80,8 @@
 //   objects, the velocity bin; static world and each moving object merge
 //   separately. The merged scatterer has the summed RCS, the
 //   RCS-weighted mean range along the RCS-weighted mean direction, and the
-//   RCS-weighted mean velocity. In the default city (radar1 of
-//   scenarios/default.json) this leaves about 1600 static scatterers, the
-//   resolution cells its view occupies, and 3-4 for the UAV; the count grows
-//   with what the view holds. Summing powers drops the speckle of coherent
+//   RCS-weighted mean velocity: one static scatterer per occupied merge
+//   cell. Summing powers drops the speckle of coherent
 //   sums within a cell.
 // - Multipath (config.multipath), for each moving scatterer at range R with
 //   image R' in the ground plane z = 0 (reflection amplitude rho =
