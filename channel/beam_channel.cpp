@@ -6,10 +6,13 @@
 #include <stdexcept>
 #include <string>
 
+#include "sim/core/physical_constants.h"
+
 namespace uavsim::channel {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using core::kPi;
+using core::kSpeedOfLight_mps;
 constexpr double kMinDistanceM = 0.01;
 // Off-wall offset of a reflection point for the blockage test of its legs:
 // the point lies on the wall's own triangles, which must not count.
@@ -20,7 +23,7 @@ double DbToAmplitude(double db) { return std::pow(10.0, db / 20.0); }
 
 }  // namespace
 
-double WavelengthM(double carrier_ghz) { return kSpeedOfLightMps / (carrier_ghz * 1e9); }
+double WavelengthM(double carrier_ghz) { return kSpeedOfLight_mps / (carrier_ghz * 1e9); }
 
 double FreeSpaceGain(double distance_m, double wavelength_m) {
   const double a = wavelength_m / (4.0 * kPi * distance_m);

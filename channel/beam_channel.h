@@ -58,8 +58,6 @@
 
 namespace uavsim::channel {
 
-constexpr double kSpeedOfLightMps = 299792458.0;
-
 // lambda = c / f_c.
 double WavelengthM(double carrier_ghz);
 // Friis free-space power gain between isotropic antennas, (lambda / (4 pi d))^2;

@@ -86,10 +86,7 @@ void Visit(V& v, LinkConfig& c) {
   v("coding_gain_db", c.coding_gain_db, Rule::Range(0.0, 20.0));
   v("carrier_ghz", c.carrier_ghz, Rule::Range(1.0, 1000.0));
   v("path_length_m", c.path_length_m, Rule::NonNegative(100000.0));
-  v.Enum("polarization", c.polarization,
-         {{"horizontal", Polarization::kHorizontal},
-          {"vertical", Polarization::kVertical},
-          {"circular", Polarization::kCircular}});
+  v.Enum("polarization", c.polarization, core::PolarizationNames());
   v("path_elevation_deg", c.path_elevation_deg, Rule::Range(0.0, 90.0));
   v.Array("outages", c.outages, 0, 10000);
 }

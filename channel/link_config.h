@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "channel/rain_attenuation.h"
+#include "sim/core/rain_attenuation.h"
 
 namespace uavsim::channel {
 
@@ -79,7 +79,7 @@ struct LinkConfig {
   // unset: rain does not affect this link.
   std::optional<double> carrier_ghz;
   double path_length_m = 1000.0;  // rain-filled length of the path (uniform rain)
-  Polarization polarization = Polarization::kHorizontal;
+  core::Polarization polarization = core::Polarization::kHorizontal;
   double path_elevation_deg = 0.0;
 
   std::vector<OutageConfig> outages;

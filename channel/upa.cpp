@@ -3,10 +3,12 @@
 #include <Eigen/Geometry>
 #include <cmath>
 
+#include "sim/core/physical_constants.h"
+
 namespace uavsim::channel {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using core::kPi;
 
 double Radians(double deg) { return deg * kPi / 180.0; }
 

@@ -6,8 +6,8 @@
 #include <stdexcept>
 #include <utility>
 
-#include "channel/rain_attenuation.h"
 #include "sim/core/json_io.h"
+#include "sim/core/rain_attenuation.h"
 
 namespace uavsim::channel {
 namespace {
@@ -142,8 +142,8 @@ void Uplink::SetWeather(const core::WeatherConfig& weather) {
     throw std::invalid_argument("uplink: rain rate must be finite and >= 0 mm/h");
   rain_attenuation_db_ =
       config_.carrier_ghz
-          ? RainSpecificAttenuationDbPerKm(*config_.carrier_ghz, weather.rain_mm_h,
-                                           config_.polarization, config_.path_elevation_deg) *
+          ? core::RainSpecificAttenuationDbPerKm(*config_.carrier_ghz, weather.rain_mm_h,
+                                                 config_.polarization, config_.path_elevation_deg) *
                 config_.path_length_m / 1000.0
           : 0.0;
   snr_db_ = config_.snr_db + config_.coding_gain_db - rain_attenuation_db_;

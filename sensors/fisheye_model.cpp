@@ -5,11 +5,13 @@
 #include <cmath>
 #include <limits>
 
+#include "sim/core/physical_constants.h"
+
 namespace uavsim::sensors {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
-constexpr double kPi = 3.14159265358979323846;
+using core::kPi;
 
 }  // namespace
 

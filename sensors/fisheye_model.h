@@ -60,7 +60,7 @@ class FisheyeModel {
   // zero vector where (u, v) sees nothing (outside the valid domain).
   Eigen::Vector3d Unproject(double u, double v) const;
 
-  // The ray of every pixel centre, computed once (about 1 us a pixel).
+  // The ray of every pixel centre, computed once.
   RayTable ComputeRayTable() const;
 
   int width_px() const { return width_px_; }

@@ -7,10 +7,12 @@
 #include <algorithm>
 #include <cmath>
 
+#include "sim/core/physical_constants.h"
+
 namespace uavsim::sensors {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using core::kPi;
 
 // Radiometry in units of the 8-bit full scale at exposure 1. A white
 // surface facing a 45-degree sun would sit just above full scale, so the

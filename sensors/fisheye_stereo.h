@@ -64,7 +64,7 @@ class FisheyeStereo {
   static constexpr int kSubsamples = 4;
   static constexpr int kMaxSubsampledSpanPx = 24;
 
-  // Computes the per-pixel ray table once (about 0.15 s for 640 x 480).
+  // Computes the per-pixel ray table once.
   FisheyeStereo(const FisheyeStereoConfig& config, const RaycastScene& scene);
 
   // Renders both eyes of the scene as it is posed now (the caller has called

@@ -17,13 +17,14 @@
 
 #include "sim/core/error.h"
 #include "sim/core/json_io.h"
+#include "sim/core/physical_constants.h"
 
 namespace uavsim::sensors {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kSpeedOfLightMps = 299792458.0;
-constexpr double kBoltzmannJPerK = 1.380649e-23;
+using core::kBoltzmann_J_per_K;
+using core::kPi;
+using core::kSpeedOfLight_mps;
 constexpr double kReferenceTemperatureK = 290.0;  // IEEE noise-figure reference T0
 constexpr double kMinRangeM = 0.1;
 constexpr std::size_t kBlockRays = 64;
@@ -162,15 +163,16 @@ FmcwRadar::FmcwRadar(const FmcwRadarConfig& config, RaycastScene& scene)
     throw std::invalid_argument(e.what());
   }
   const FmcwRadarConfig& c = config_;
-  lambda_m_ = kSpeedOfLightMps / (c.carrier_ghz * 1e9);
+  lambda_m_ = kSpeedOfLight_mps / (c.carrier_ghz * 1e9);
+  rain_ = core::RainCoefficientsFor(c.carrier_ghz, c.polarization);
   slope_hz_per_s_ = c.bandwidth_mhz * 1e6 / (c.chirp_duration_us * 1e-6);
   sample_rate_hz_ = c.sample_rate_msps * 1e6;
   chirp_period_s_ = (c.chirp_duration_us + c.idle_time_us) * 1e-6;
-  max_range_m_ = sample_rate_hz_ * kSpeedOfLightMps / (2.0 * slope_hz_per_s_);
+  max_range_m_ = sample_rate_hz_ * kSpeedOfLight_mps / (2.0 * slope_hz_per_s_);
   range_bin_m_ = max_range_m_ / c.adc_samples;
   velocity_bin_mps_ = lambda_m_ / (2.0 * c.chirps_per_frame * chirp_period_s_);
   noise_power_w_ =
-      kBoltzmannJPerK * kReferenceTemperatureK * sample_rate_hz_ * DbToLinear(c.noise_figure_db);
+      kBoltzmann_J_per_K * kReferenceTemperatureK * sample_rate_hz_ * DbToLinear(c.noise_figure_db);
   // Radar equation over kTBF: P_t G^2 lambda^2 / ((4 pi)^3 k T0 fs F)
   const double gain = DbToLinear(c.antenna_gain_dbi);
   snr_scale_ = DbToLinear(c.tx_power_dbm - 30.0) * gain * gain * lambda_m_ * lambda_m_ /
@@ -206,7 +208,7 @@ FmcwRadar::FmcwRadar(FmcwRadar&&) noexcept = default;
 double FmcwRadar::RainAttenuationDbPerKm(double rain_mm_h) const {
   if (rain_mm_h <= 0.0) return 0.0;
   // ITU-R P.838-3 eq. (1)
-  return config_.rain_attenuation_k * std::pow(rain_mm_h, config_.rain_attenuation_alpha);
+  return rain_.k * std::pow(rain_mm_h, rain_.alpha);
 }
 
 double FmcwRadar::RainReflectivityPerM(double rain_mm_h) const {
@@ -657,7 +659,7 @@ RadarCube FmcwRadar::Synthesize(const std::vector<Scatterer>& scatterers,
       [&](const tbb::blocked_range<std::size_t>& range) {
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
           const Echo& e = echoes[order[i]];
-          const double f_b = 2.0 * slope_hz_per_s_ * e.range_m / kSpeedOfLightMps;
+          const double f_b = 2.0 * slope_hz_per_s_ * e.range_m / kSpeedOfLight_mps;
           const double w = 2.0 * kPi * f_b / sample_rate_hz_;
           const std::complex<double> step = Phasor(w);
           std::complex<double> p = 1.0;

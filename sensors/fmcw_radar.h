@@ -69,12 +69,9 @@
 //     metal             gamma -15 dB; |Gamma0|^2 = 1 (conductor), m = 0.1.
 //     vegetation        gamma -10 dB, no lobe (foliage is a volume scatterer).
 //     drone             gamma -5 dB, no lobe: sigma = 0.32 x the projected
-//                       area; 0.03-0.045 m^2 for the default 0.5 x 0.5 x 0.2 m
-//                       quadrotor from any aspect the tests try (small
-//                       multirotors: 0.01-0.1 m^2 at 77 GHz).
-//     bird              gamma -7 dB: 0.001-0.01 m^2 for 0.3-0.9 m wingspans
-//                       seen from below or the side; a small bird head-on
-//                       and level shows less (1e-4 m^2).
+//                       area (small multirotors: 0.01-0.1 m^2 at 77 GHz).
+//     bird              gamma -7 dB, no lobe: chosen for 0.001-0.01 m^2 from
+//                       0.3-0.9 m wingspans seen from below or the side.
 // - Velocity: RaycastScene::PointVelocity of the hit point at t_s (zero for
 //   the static world).
 // - Merging: hits are summed in power within cells of merge_cell_fraction
@@ -83,10 +80,8 @@
 //   objects, the velocity bin; static world and each moving object merge
 //   separately. The merged scatterer has the summed RCS, the
 //   RCS-weighted mean range along the RCS-weighted mean direction, and the
-//   RCS-weighted mean velocity. In the default city (radar1 of
-//   scenarios/default.json) this leaves about 1600 static scatterers, the
-//   resolution cells its view occupies, and 3-4 for the UAV; the count grows
-//   with what the view holds. Summing powers drops the speckle of coherent
+//   RCS-weighted mean velocity: one static scatterer per occupied merge
+//   cell. Summing powers drops the speckle of coherent
 //   sums within a cell.
 // - Multipath (config.multipath), for each moving scatterer at range R with
 //   image R' in the ground plane z = 0 (reflection amplitude rho =
@@ -102,10 +97,10 @@
 // Synthesize (scatterers -> cube):
 // - |a_k|^2 = P_t G^2 lambda^2 sigma / ((4 pi)^3 R^4 k T0 fs F)
 //             * 10^(-2 gamma_rain R / 10^4)
-//   with gamma_rain = k R_rain^alpha dB/km, ITU-R P.838-3 (eq. 1) at the
-//   carrier: the defaults k = 1.1320, alpha = 0.7177 are the recommendation's
-//   horizontal-polarisation coefficients at 77 GHz (its regression, eqs. 2-3,
-//   which reproduces its Table 5); 11.4 dB/km at 25 mm/h.
+//   with gamma_rain = k R_rain^alpha dB/km, ITU-R P.838-3 (eq. 1), k and
+//   alpha from its regression (eqs. 2-5, sim/core/rain_attenuation.h) at
+//   carrier_ghz for config.polarization on a horizontal path (at 77 GHz,
+//   horizontal: k = 1.1320, alpha = 0.7177, 11.4 dB/km at 25 mm/h).
 // - Scatterers closer than 0.1 m or at or beyond max_range (whose beat would
 //   alias; the IF filter of a real radar removes them) are left out. No
 //   antenna pattern: G holds over the field of view, where the rays go.
@@ -166,6 +161,7 @@
 #include "sensors/frames.h"
 #include "sensors/radar_cube.h"
 #include "sensors/raycast_scene.h"
+#include "sim/core/rain_attenuation.h"
 #include "sim/core/rng.h"
 #include "sim/core/weather.h"
 #include "sim/core/world_geometry.h"
@@ -226,6 +222,9 @@ class FmcwRadar {
   // gamma_rain (dB/km) and eta (m^2/m^3) at this radar's carrier.
   double RainAttenuationDbPerKm(double rain_mm_h) const;
   double RainReflectivityPerM(double rain_mm_h) const;
+  // k and alpha of gamma_rain: ITU-R P.838-3 at carrier_ghz for the
+  // configured polarisation, horizontal path.
+  const core::RainCoefficients& rain_coefficients() const { return rain_; }
 
   double wavelength_m() const { return lambda_m_; }
   double slope_hz_per_s() const { return slope_hz_per_s_; }
@@ -259,7 +258,8 @@ class FmcwRadar {
   double lambda_m_ = 0.0, slope_hz_per_s_ = 0.0, sample_rate_hz_ = 0.0, chirp_period_s_ = 0.0;
   double max_range_m_ = 0.0, range_bin_m_ = 0.0, velocity_bin_mps_ = 0.0;
   double noise_power_w_ = 0.0;
-  double snr_scale_ = 0.0;  // P_t G^2 lambda^2 / ((4 pi)^3 k T0 fs F), m^2 -> SNR at 1 m
+  core::RainCoefficients rain_;  // ITU-R P.838-3 at the carrier
+  double snr_scale_ = 0.0;       // P_t G^2 lambda^2 / ((4 pi)^3 k T0 fs F), m^2 -> SNR at 1 m
   // The ray grid: n_az_ x n_el_ cells, azimuth fastest.
   int n_az_ = 0, n_el_ = 0;
   double d_az_rad_ = 0.0, d_el_rad_ = 0.0;

@@ -70,8 +70,7 @@ void Visit(V& v, FmcwRadarConfig& c) {
   v("multipath", c.multipath);
   v("multipath_reflection", c.multipath_reflection, Rule::Probability());
   v("thermal_noise", c.thermal_noise);
-  v("rain_attenuation_k", c.rain_attenuation_k, Rule::NonNegative(100.0));
-  v("rain_attenuation_alpha", c.rain_attenuation_alpha, Rule::Range(0.1, 3.0));
+  v.Enum("polarization", c.polarization, core::PolarizationNames());
   v("rain_clutter", c.rain_clutter);
   v("rain_clutter_eta_coefficient", c.rain_clutter_eta_coefficient, Rule::NonNegative(1.0));
   v("rain_clutter_eta_exponent", c.rain_clutter_eta_exponent, Rule::Range(0.1, 3.0));

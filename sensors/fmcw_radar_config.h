@@ -9,6 +9,7 @@
 #include "sensors/frame_timing.h"
 #include "sensors/radar_processing_config.h"
 #include "sim/core/pose.h"
+#include "sim/core/rain_attenuation.h"
 
 namespace uavsim::sensors {
 
@@ -68,11 +69,10 @@ struct FmcwRadarConfig {
 
   // Signal (Synthesize).
   bool thermal_noise = true;  // false: the noiseless cube (tests)
-  // Rain attenuation gamma = k R^alpha dB/km (ITU-R P.838-3 at the carrier;
-  // the defaults are for 77 GHz, horizontal polarisation: change them with
-  // carrier_ghz).
-  double rain_attenuation_k = 1.1320;
-  double rain_attenuation_alpha = 0.7177;
+  // Rain attenuation gamma = k R^alpha dB/km: k and alpha from ITU-R P.838-3
+  // at carrier_ghz for this polarisation on a horizontal path
+  // (sim/core/rain_attenuation.h).
+  core::Polarization polarization = core::Polarization::kHorizontal;
   // Rain clutter: volume reflectivity eta = coefficient R^exponent m^2/m^3
   // (R in mm/h) from rain_clutter_min_range_m out. The defaults are the Mie
   // backscatter of Marshall-Palmer rain at 77 GHz (fmcw_radar.h); the

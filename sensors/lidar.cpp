@@ -12,11 +12,13 @@
 #include <stdexcept>
 #include <string>
 
+#include "sim/core/physical_constants.h"
+
 namespace uavsim::sensors {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kSpeedOfLightMps = 299792458.0;
+using core::kPi;
+using core::kSpeedOfLight_mps;
 constexpr double kWavelengthNm = 905.0;
 
 // Rosette prism rates. Their ratio is the golden ratio, the "most
@@ -323,7 +325,7 @@ PointCloudFrame Lidar::Capture(double t_start_s, const core::WeatherConfig& weat
   if (weather.fog_visibility_m) {
     atm.fog = true;
     const double beta = kFogBackscatterTimesVisibility / *weather.fog_visibility_m;
-    const double rho_v = kPi * beta * kSpeedOfLightMps * c.pulse_width_ns * 1e-9 / 2.0;
+    const double rho_v = kPi * beta * kSpeedOfLight_mps * c.pulse_width_ns * 1e-9 / 2.0;
     // Past full overlap S(r) <= rho_v / r^2, so beyond this no fade is detected.
     const double r_end =
         std::min(r_lim, std::max(c.full_overlap_range_m, std::sqrt(kMaxFade * rho_v / p_th)));

@@ -14,8 +14,7 @@
 //    f1 and -f2 (f1 / f2 = golden ratio) deflect the beam by
 //    (fov/4) (e^{i 2 pi f1 t} + e^{-i 2 pi f2 t}), a rose curve that rotates
 //    and never closes: every petal crosses the centre, and coverage of the
-//    circular fov_deg grows with integration time (about 40 % of 1-degree
-//    cells in one 10 Hz frame, all of them in 0.5 s), as on Livox Mid-40/Avia.
+//    circular fov_deg grows with integration time, as on Livox Mid-40/Avia.
 //    The pattern runs on absolute time, so consecutive frames differ.
 //
 // Detection, in normalised power units (m^-2):

@@ -13,12 +13,14 @@
 #include <stdexcept>
 #include <string>
 
+#include "sim/core/physical_constants.h"
+
 namespace uavsim::sensors {
 namespace {
 
-constexpr double kSpeedOfLightMps = 299792458.0;
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kDegToRad = kPi / 180.0;
+using core::kDegToRad;
+using core::kPi;
+using core::kSpeedOfLight_mps;
 // The pattern search stops refining a MUSIC peak below this step.
 constexpr double kMusicTolDeg = 5e-3;
 // Floor of the CFAR noise estimate, in units of the thermal noise of a cell.
@@ -160,12 +162,12 @@ RadarProcessor::RadarProcessor(const FmcwRadarConfig& config)
                                 " sources need more than the array's " + std::to_string(antennas_) +
                                 " elements");
 
-  lambda_m_ = kSpeedOfLightMps / (config_.carrier_ghz * 1e9);
+  lambda_m_ = kSpeedOfLight_mps / (config_.carrier_ghz * 1e9);
   dx_m_ = config_.spacing_x_wavelengths * lambda_m_;
   dy_m_ = config_.spacing_y_wavelengths * lambda_m_;
   const double slope_hz_per_s = config_.bandwidth_mhz * 1e6 / (config_.chirp_duration_us * 1e-6);
   const double fs_hz = config_.sample_rate_msps * 1e6;
-  range_bin_m_ = kSpeedOfLightMps * fs_hz / (2.0 * slope_hz_per_s * samples_);
+  range_bin_m_ = kSpeedOfLight_mps * fs_hz / (2.0 * slope_hz_per_s * samples_);
   const double chirp_period_s = (config_.chirp_duration_us + config_.idle_time_us) * 1e-6;
   velocity_bin_mps_ = lambda_m_ / (2.0 * chirps_ * chirp_period_s);
 

@@ -12,13 +12,14 @@
 #include "channel/beam_channel.h"
 #include "channel/beamformer.h"
 #include "channel/path_oracle.h"
+#include "sim/core/physical_constants.h"
 #include "sim/core/rng.h"
 #include "sim/core/world_geometry.h"
 
 namespace uavsim::sim {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using core::kPi;
 constexpr std::uint64_t kSeed = 1;
 
 // Facades that block nothing: the cost measured is the channel's own.

@@ -1,6 +1,6 @@
 // Geometric anchors: where a node's pre-processing already says the target
 // is, in world coordinates, and the edge's bookkeeping of them (an extension
-// of the paper, see NOTES.md 2026-11-22 (4) and (5)). The learned edge
+// of the paper; why, in NOTES.md). The learned edge
 // network does not regress a position to a few centimetres from latents
 // alone: an anchored UAVLoc model picks among these candidate positions (a
 // masked softmax, with a free regressed position for windows with no good
@@ -8,7 +8,7 @@
 // and the trainer share it.
 //
 //   camera  the ray from the left eye through the ROI centre (what the
-//           camera knows well: its bearing; 0.1 degree median error)
+//           camera knows well: its bearing)
 //   LiDAR   the centroid of the dynamic points
 //   radar   the centroid of the kept cluster
 //
@@ -28,13 +28,12 @@
 // kLidarGate_m of the ray, the radar centroid within kRadarGate_m of the
 // ray's point at the radar's range, the ray at most kGateMaxAge_s apart in
 // capture time): the node's cluster is often not the drone (rain and fog
-// returns, the radar's largest cluster a car), and on the training episodes
-// the gate cut the best candidate's RMSE from 8.4 m to 1.7 m (dry) and from
-// 16 m to 4.4 m (rain, fog). See NOTES.md 2026-11-22 (5).
-// A seventh candidate is the track of an AnchorFilter (pipeline/
-// anchor_filter.h; the IMM of a coordinated turn and a constant velocity)
-// fed every anchor of every window: the fixes filtered together instead of
-// one carried forward (NOTES.md 2026-11-22 (6) and (7)).
+// returns, the radar's largest cluster a car); the gate widths were chosen
+// on the training episodes (NOTES.md).
+// A seventh candidate is the track of an AnchorFilter
+// (pipeline/anchored/anchor_filter.h; the IMM of a coordinated turn and a
+// constant velocity) fed every anchor of every window: the fixes filtered
+// together instead of one carried forward.
 #pragma once
 
 #include <Eigen/Core>
@@ -134,10 +133,9 @@ class AnchorTracker {
 // which the candidate is valid and within radius_m of the truth; zero for a
 // candidate with fewer than min_windows such windows. The candidates locate
 // what the sensors see of the target, not its reference point: seen from
-// below, the rotor discs' plane, 4 cm above the body's centre (the camera's
-// coverage centroid, the LiDAR's hits), and the radar's nearest scatterer
-// (NOTES.md 2026-11-22 (8)). windows[i]'s candidates and truth[i] are
-// normalised by scale_m. Throws std::invalid_argument for sizes that differ
+// below, the rotor discs' plane (the camera's coverage centroid, the LiDAR's
+// hits), and the radar's nearest scatterer. windows[i]'s candidates and
+// truth[i] are normalised by scale_m. Throws std::invalid_argument for sizes that differ
 // or scale_m, radius_m not finite and > 0.
 std::array<Eigen::Vector3d, kAnchorCandidates> MedianCandidateOffsets(
     const std::vector<AnchorWindow>& windows, const std::vector<Eigen::Vector3d>& truth,

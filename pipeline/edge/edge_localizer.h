@@ -41,8 +41,8 @@ class EdgeLocalizer {
   // the previous window, a latent whose size is not latent_dim(), or a
   // non-finite latent value.
   // With WaitForTrack(true) an anchored model answers only from the first
-  // window in which its anchor filter holds a confirmed track (pipeline/
-  // anchor_filter.h: started at a LiDAR fix that agreed with the camera's
+  // window in which its anchor filter holds a confirmed track
+  // (pipeline/anchored/anchor_filter.h: started at a LiDAR fix that agreed with the camera's
   // ray, or at two radar fixes that did and agreed with each other, and
   // known to kConfirmedSigma_m at the window's end; before that its range
   // is a guess, metres off), as the EKF answers only once a track is

@@ -54,17 +54,12 @@ struct UavLocModelConfig {
   // Anchored (pipeline/anchored/anchors.h): the anchor features join t^f at the Mamba
   // input, and the head gives logits over the window's valid candidates c_i
   // and two free hypotheses: the held camera ray's point at a learned range
-  // t, f = o + t d (t = softplus; the ray's bearing is good to 0.1 degree;
-  // allowed when a ray is held), and a learned absolute position a (the
-  // paper head's regression; always allowed):
+  // t, f = o + t d (t = softplus; allowed when a ray is held), and a
+  // learned absolute position a (the paper head's regression; always
+  // allowed):
   //   p = sum_i w_i c_i + w_f f + w_a a,  w = softmax over the allowed ones.
-  // (An absolute free candidate alone took up to 0.9 of the weight where it
-  // was 5 m off and a candidate 0.5 m; without a free candidate the head had
-  // to follow the radar's cluster where it was the only one, 50-100 m off;
-  // NOTES.md 2026-11-22 (5).)
-  // (The first anchored head added a learned residual r to every candidate:
-  // at the default run's scale it was half a metre off where the candidates
-  // were 0.1 m off; see NOTES.md 2026-11-22 (5).)
+  // (Why two free hypotheses and no learned residual per candidate: chosen
+  // on training episodes, see NOTES.md.)
   bool anchored = false;
   // The anchor features the model was trained with: must be this build's
   // kAnchorFeatures (41 for the first anchored head, with the residual; 47

@@ -54,8 +54,6 @@
 // Deterministic: the output is a pure function of the frames seen since
 // construction (or Reset), whatever OpenCV's thread count. Process throws
 // std::invalid_argument if an eye's size differs from the camera config's.
-// Cost at 640 x 480 on one x86 core: about 8 ms a frame (two remaps 2 ms,
-// MOG2 3.5 ms); raw: about 1.2 ms.
 #pragma once
 
 #include <Eigen/Geometry>

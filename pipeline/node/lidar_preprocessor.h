@@ -26,8 +26,7 @@
 // coverage) that includes the target's own returns during warm-up: its
 // points are lost wherever it passes within a voxel of them again. Points with
 // non-finite coordinates are ignored. Deterministic: the output is a pure
-// function of the frames seen since construction (or Reset). Cost: about
-// 1 ms for a 19k-point scan on one x86 core.
+// function of the frames seen since construction (or Reset).
 #pragma once
 
 #include <cstdint>

@@ -50,7 +50,7 @@ struct LidarPreprocessConfig {
   // Static background: voxels hit in at least occupancy_threshold of the
   // first warmup_frames scans. Nothing is reported during warm-up. The
   // default suits the default Livox-like rosette, whose non-repetitive
-  // pattern hits a given 0.5 m voxel in only ~7 % of its 0.1 s scans: one
+  // pattern hits a given 0.5 m voxel in only a few of its 0.1 s scans: one
   // hit in 20 scans makes a voxel static (a target seen during warm-up then
   // leaves its voxels as background). A spinning LiDAR hits every static
   // voxel in every scan and can use e.g. 0.5, which no passing target reaches.

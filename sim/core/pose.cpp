@@ -3,11 +3,12 @@
 #include <cmath>
 
 #include "sim/core/json_io.h"
+#include "sim/core/physical_constants.h"
 
 namespace uavsim::core {
 
 Eigen::Isometry3d PoseConfig::ToIsometry() const {
-  const Eigen::Vector3d rpy = rpy_deg * (M_PI / 180.0);
+  const Eigen::Vector3d rpy = rpy_deg * kDegToRad;
   Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
   X.linear() = (Eigen::AngleAxisd(rpy.z(), Eigen::Vector3d::UnitZ()) *
                 Eigen::AngleAxisd(rpy.y(), Eigen::Vector3d::UnitY()) *

@@ -10,12 +10,11 @@
 
 #include "sim/core/error.h"
 #include "sim/core/json_io.h"
+#include "sim/core/physical_constants.h"
 
 namespace uavsim::core {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kDegToRad = kPi / 180.0;
 constexpr double kMaxCoordinate_m = 1e5;
 // Band of the random trajectory's sinusoid periods: slow enough to look like
 // deliberate flight, fast enough that a 60 s run sees several turns.

@@ -13,6 +13,7 @@
 #include <utility>
 
 #include "sim/core/error.h"
+#include "sim/core/physical_constants.h"
 
 namespace uavsim::core {
 
@@ -50,7 +51,8 @@ using Eigen::Vector2f;
 using Eigen::Vector3d;
 using Eigen::Vector3f;
 
-constexpr float kPi = 3.14159265358979323846f;
+// Float pi for the float geometry (the float nearest core::kPi).
+constexpr float kPi_f = static_cast<float>(kPi);
 
 // City layout constants (metres). Street furniture keeps its real-world size
 // whatever the block size; sidewalks shrink with small blocks.
@@ -118,7 +120,7 @@ void AddPrism(TriangleMesh& m, const std::vector<Vector2f>& ring, float z0, floa
 std::vector<Vector2f> Octagon(const Vector2f& c, float rx, float ry) {
   std::vector<Vector2f> ring;
   for (int k = 0; k < 8; ++k) {
-    const float a = static_cast<float>(k) * kPi / 4.0f;
+    const float a = static_cast<float>(k) * kPi_f / 4.0f;
     ring.emplace_back(c.x() + rx * std::cos(a), c.y() + ry * std::sin(a));
   }
   // cos/sin of multiples of pi/4 are not exact in float; pin the extremes.

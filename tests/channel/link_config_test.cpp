@@ -9,9 +9,9 @@
 using uavsim::channel::CheckOutageNodes;
 using uavsim::channel::LinkConfig;
 using uavsim::channel::Modulation;
-using uavsim::channel::Polarization;
 using uavsim::core::FromJson;
 using uavsim::core::Json;
+using uavsim::core::Polarization;
 using uavsim::core::ToJson;
 using uavsim::testing::ConfigErrorOf;
 

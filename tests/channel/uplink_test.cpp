@@ -494,7 +494,7 @@ TEST_CASE("Uplink: rain on a 28 GHz link lowers the SNR and loses packets at the
   c.modulation = Modulation::kQam16;
   c.carrier_ghz = 28.0;
   c.path_length_m = 1000.0;
-  c.polarization = uavsim::channel::Polarization::kHorizontal;
+  c.polarization = uavsim::core::Polarization::kHorizontal;
   Bench b(c, 9, 25.0);
   // P.838-3 Table 5 at 28 GHz, horizontal: k = 0.2051, alpha = 0.9679; 1 km.
   const double a_rain = 0.2051 * std::pow(25.0, 0.9679);

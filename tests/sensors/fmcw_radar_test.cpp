@@ -1,9 +1,10 @@
 // FMCW radar scatterers and IF-cube synthesis against closed forms: the
 // header's signal model written out again here sample by sample, the radar
 // equation's 40 log10 R, kTBF noise, plane and box geometry, projected-area
-// RCS, ITU-R P.838-3 rain attenuation (channel/'s implementation as the
-// oracle), the rain clutter's eta law, ground multipath, determinism and
-// config errors. Expected values never come from the model's own output.
+// RCS, ITU-R P.838-3 rain attenuation (sim/core/rain_attenuation.h and the
+// uplink's rain loss at the same carrier as the oracles), the rain clutter's
+// eta law, ground multipath, determinism and config errors. Expected values
+// never come from the model's own output.
 #include "sensors/fmcw_radar.h"
 
 #include <tbb/task_arena.h>
@@ -19,9 +20,11 @@
 #include <vector>
 #include "test_support.h"
 
-#include "channel/rain_attenuation.h"
+#include "channel/uplink.h"
 #include "sim/core/error.h"
 #include "sim/core/json_io.h"
+#include "sim/core/rain_attenuation.h"
+#include "sim/core/simulator.h"
 
 using uavsim::core::Material;
 using uavsim::core::RadarClass;
@@ -398,10 +401,50 @@ TEST_CASE("FmcwRadar: rain at 25 mm/h attenuates by 2 gamma R with P.838-3's gam
   wet.rain_mm_h = 25.0;
   const double loss_db =
       10.0 * std::log10(MeanPower(SynthesizeOne(c, s)) / MeanPower(SynthesizeOne(c, s, wet)));
-  const double gamma_db_per_km = uavsim::channel::RainSpecificAttenuationDbPerKm(
-      77.0, 25.0, uavsim::channel::Polarization::kHorizontal);
+  const double gamma_db_per_km = uavsim::core::RainSpecificAttenuationDbPerKm(
+      77.0, 25.0, uavsim::core::Polarization::kHorizontal);
   INFO("gamma " << gamma_db_per_km << " dB/km, loss " << loss_db << " dB");
   CHECK(loss_db == Approx(2.0 * gamma_db_per_km * r / 1000.0).epsilon(1e-3));
+}
+
+TEST_CASE("FmcwRadar: at 77 GHz its P.838-3 coefficients are the former k = 1.1320, alpha = 0.7177",
+          "[sensors]") {
+  // The defaults the config hard-coded (horizontal polarisation, 77 GHz),
+  // given to four decimals.
+  WorldGeometry empty;
+  RaycastScene scene(empty);
+  const FmcwRadar radar(Quiet(), scene);
+  CHECK(radar.rain_coefficients().k == Approx(1.1320).margin(5e-5));
+  CHECK(radar.rain_coefficients().alpha == Approx(0.7177).margin(5e-5));
+  CHECK(radar.RainAttenuationDbPerKm(25.0) ==
+        Approx(1.1320 * std::pow(25.0, 0.7177)).epsilon(1e-4));
+  CHECK(radar.RainAttenuationDbPerKm(0.0) == 0.0);
+}
+
+TEST_CASE("FmcwRadar: at 24 GHz its rain attenuation equals the uplink's at 24 GHz", "[sensors]") {
+  using uavsim::core::Polarization;
+  const double rain_mm_h = 10.0;
+  for (const Polarization pol :
+       {Polarization::kHorizontal, Polarization::kVertical, Polarization::kCircular}) {
+    FmcwRadarConfig c = Quiet();
+    c.carrier_ghz = 24.0;
+    c.polarization = pol;
+    WorldGeometry empty;
+    RaycastScene scene(empty);
+    const FmcwRadar radar(c, scene);
+
+    uavsim::channel::LinkConfig l;
+    l.carrier_ghz = 24.0;
+    l.polarization = pol;
+    l.path_length_m = 1000.0;  // so the link's loss in dB is gamma in dB/km
+    l.path_elevation_deg = 0.0;
+    uavsim::core::Simulator sim;
+    const uavsim::channel::Uplink link(sim, l, WeatherConfig{rain_mm_h, {}, 1.0},
+                                       RngStream(1, "link/test"), {});
+    INFO("polarisation " << static_cast<int>(pol));
+    REQUIRE(link.rain_attenuation_db() > 0.0);
+    CHECK(radar.RainAttenuationDbPerKm(rain_mm_h) == Approx(link.rain_attenuation_db()));
+  }
 }
 
 // Expected rain-clutter power per sample: eta times the integral over the
@@ -411,8 +454,8 @@ TEST_CASE("FmcwRadar: rain at 25 mm/h attenuates by 2 gamma R with P.838-3's gam
 // the first surface along a radar-frame direction.
 double ExpectedRainPower(const FmcwRadarConfig& c, double rain_mm_h, double eta, double r_min,
                          const std::function<double(const Eigen::Vector3d&)>& free_range) {
-  const double gamma_db_per_km = uavsim::channel::RainSpecificAttenuationDbPerKm(
-      77.0, rain_mm_h, uavsim::channel::Polarization::kHorizontal);
+  const double gamma_db_per_km = uavsim::core::RainSpecificAttenuationDbPerKm(
+      77.0, rain_mm_h, uavsim::core::Polarization::kHorizontal);
   const double r_bin = 10e6 * kC / (2.0 * 900e6 / 60e-6) / 512.0;
   const double r_end = 511.5 * r_bin;
   // R^2 times the SNR of 1 m^2 at R is k0 / R^2 (k0 = SNR at 1 m) times the
@@ -614,7 +657,8 @@ TEST_CASE("FmcwRadarConfig: new keys have defaults, rules and clear errors", "[s
   using uavsim::core::ConfigError;
   using uavsim::core::Json;
   const Json defaults = uavsim::core::ToJson(FmcwRadarConfig{});
-  CHECK(defaults["rain_attenuation_k"] == 1.1320);
+  CHECK(defaults["polarization"] == "horizontal");
+  CHECK_FALSE(defaults.contains("rain_attenuation_k"));
   CHECK(defaults["surfaces"]["drone"]["gamma_db"] == -5.0);
   CHECK(defaults["multipath"] == false);
   CHECK(defaults.contains("processing"));

@@ -6,8 +6,8 @@
 #include <cmath>
 #include <sstream>
 
-#include "channel/rain_attenuation.h"
 #include "sim/core/json_io.h"
+#include "sim/core/rain_attenuation.h"
 #include "test_support.h"
 
 using uavsim::core::Json;
@@ -64,8 +64,8 @@ TEST_CASE("Sweep: rain lowers delivery on a 60 GHz uplink and reaches LiDAR and 
   // Dry: the 22 dB link loses (almost) nothing. 60 mm/h at 60 GHz is
   // ~ 20 dB/km, 10 dB over the path: 16-QAM at 12 dB loses nearly every
   // fragment.
-  const double g60 = uavsim::channel::RainSpecificAttenuationDbPerKm(
-      60.0, 60.0, uavsim::channel::Polarization::kHorizontal, 0.0);
+  const double g60 = uavsim::core::RainSpecificAttenuationDbPerKm(
+      60.0, 60.0, uavsim::core::Polarization::kHorizontal, 0.0);
   CHECK(g60 * 0.5 > 9.0);
   CHECK(d0 > 0.99);
   CHECK(d20 < d0);

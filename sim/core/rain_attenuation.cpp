@@ -1,10 +1,12 @@
-#include "channel/rain_attenuation.h"
+#include "sim/core/rain_attenuation.h"
 
 #include <cmath>
 #include <stdexcept>
 #include <string>
 
-namespace uavsim::channel {
+#include "sim/core/physical_constants.h"
+
+namespace uavsim::core {
 namespace {
 
 struct Gaussian {
@@ -38,8 +40,6 @@ constexpr Gaussian kAv[] = {{-0.07771, 2.33840, -0.76284},
                             {48.5833, 0.791459, 0.116479}};
 constexpr double kAvM = -0.053739, kAvC = 0.83433;
 
-constexpr double kPi = 3.14159265358979323846;
-
 template <std::size_t N>
 double Regression(const Gaussian (&terms)[N], double m, double c, double log_f) {
   double sum = m * log_f + c;
@@ -58,6 +58,14 @@ double CheckedLogFrequency(double f_ghz) {
 }
 
 }  // namespace
+
+const std::vector<std::pair<const char*, Polarization>>& PolarizationNames() {
+  static const std::vector<std::pair<const char*, Polarization>> names = {
+      {"horizontal", Polarization::kHorizontal},
+      {"vertical", Polarization::kVertical},
+      {"circular", Polarization::kCircular}};
+  return names;
+}
 
 RainCoefficients RainCoefficientsHorizontal(double f_ghz) {
   const double log_f = CheckedLogFrequency(f_ghz);
@@ -107,4 +115,4 @@ double RainSpecificAttenuationDbPerKm(double f_ghz, double rain_mm_h, Polarizati
   return rain_mm_h == 0.0 ? 0.0 : c.k * std::pow(rain_mm_h, c.alpha);
 }
 
-}  // namespace uavsim::channel
+}  // namespace uavsim::core
