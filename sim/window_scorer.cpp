@@ -2,14 +2,14 @@
 
 #include <utility>
 
-#include "channel/rain_attenuation.h"
+#include "sim/core/rain_attenuation.h"
 
 namespace uavsim::sim {
 namespace {
 
 channel::DownlinkScorer MakeDownlink(const Scenario& s, std::vector<std::string> steered) {
-  const double rain_db_per_km = channel::RainSpecificAttenuationDbPerKm(
-      s.base_station.carrier_ghz, s.weather.rain_mm_h, channel::Polarization::kVertical, 0.0);
+  const double rain_db_per_km = core::RainSpecificAttenuationDbPerKm(
+      s.base_station.carrier_ghz, s.weather.rain_mm_h, core::Polarization::kVertical, 0.0);
   return channel::DownlinkScorer(
       s.base_station, rain_db_per_km, std::move(steered),
       channel::SnrGridDb(s.outputs.snr_db.from, s.outputs.snr_db.to, s.outputs.snr_db.step),
