@@ -245,7 +245,8 @@ TEST_CASE("CLI: train reads its tuning from --config; the old flags name their k
   const auto help = RunCli({"train", "--help"});
   CHECK(help.exit_code == 0);
   CHECK_THAT(help.out, Catch::Contains("scenarios/training/default.json"));
-  for (const auto& [key, value] : uavsim::pipeline::TrainingConfigJson({}).items()) {
+  const Json keys = uavsim::pipeline::TrainingConfigJson({});
+  for (const auto& [key, value] : keys.items()) {
     INFO(key);
     CHECK_THAT(help.out, Catch::Contains(key));
   }
