@@ -39,6 +39,11 @@ void Visit(V& v, ModelManifest& c) {
     v.Check(IsPlainFileName(*name), key,
             "expected a file name in the model's folder, got \"" + *name + "\"");
   }
+  if constexpr (V::kReading) {
+    if (v.Has("training")) v.Object("training", c.training.emplace());
+  } else if (c.training) {
+    v.Object("training", *c.training);
+  }
 }
 UAVSIM_INSTANTIATE_VISIT(ModelManifest);
 

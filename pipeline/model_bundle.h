@@ -12,10 +12,12 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "pipeline/edge/edge_localizer.h"
 #include "pipeline/node/node_encoder.h"
+#include "pipeline/training/training_config.h"
 
 namespace uavsim::pipeline {
 
@@ -31,6 +33,9 @@ struct ModelManifest {
   std::string lidar = "lidar.json";
   std::string radar = "radar.json";
   std::string edge = "uavloc.pt";  // the edge network's weights (sidecar: + ".json")
+  // How it was trained, every key resolved ("training"; absent in models
+  // written before the training config existed).
+  std::optional<TrainingConfig> training;
 };
 
 template <class V>

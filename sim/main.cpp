@@ -110,12 +110,10 @@ const char* kSweepHelp =
     "input, 130 interrupted (finished points are kept)\n";
 
 const char* kTrainHelp =
-    "usage: uavsim train SCENARIO.json [--out MODEL] [--quick] [--seed N] [--episodes N]\n"
-    "                    [--episode-s S] [--lr RATE] [--bottleneck ib|mlp] [--head H]\n"
-    "                    [--selection-weight W] [--filter-preference M] [--plateau N]\n"
-    "                    [--offset-calibration M] [--position-loss L] [--threads N]\n"
-    "                    [--data FILE] [--label-gate M,DEG]\n"
-    "                    [--set /ptr=value] [--force] [--quiet]\n"
+    "usage: uavsim train SCENARIO.json [--out MODEL] [--config TRAIN.json]\n"
+    "                    [--config-set /ptr=value]... [--quick] [--seed N] [--episodes N]\n"
+    "                    [--episode-s S] [--bottleneck ib|mlp] [--head H] [--threads N]\n"
+    "                    [--data FILE] [--set /ptr=value]... [--force] [--quiet]\n"
     "\n"
     "Generates training data by simulation and trains the UAVLoc model with LibTorch on\n"
     "the CPU. Each episode is the scenario with its own target trajectory (orbit,\n"
@@ -123,38 +121,40 @@ const char* kTrainHelp =
     "and uplink loss; episodes are split 70/15/15 by trajectory. Stage 1 trains each\n"
     "modality's IB-CC encoder, stage 2 TE-Align, MADW, MICA and Mamba on the sequences of\n"
     "latents that arrived in time, with random modality dropout. Adam, early stopping on\n"
-    "validation. The model folder MODEL (default models/NAME) gets model.json, the parts\n"
-    "and training_report.json (losses and held-out RMSE); use it with\n"
-    "--set /pipeline/model=MODEL or \"pipeline\": {\"model\": \"MODEL\"}.\n"
+    "validation. The model folder MODEL (default models/NAME) gets model.json (with the\n"
+    "resolved training config under \"training\"), the parts and training_report.json\n"
+    "(losses and held-out RMSE); use it with --set /pipeline/model=MODEL or\n"
+    "\"pipeline\": {\"model\": \"MODEL\"}.\n"
     "\n"
-    "  --quick        a small model in under 3 minutes (17 dry episodes of 10 s)\n"
+    "  --config F     the training config, a JSON object; every key has a default ({} is\n"
+    "                 valid); scenarios/training/default.json spells out all of them and\n"
+    "                 scenarios/training/README.md says what each does:\n"
+    "                 dropout beta stage1_lr stage1_batch stage1_max_epochs stage1_patience\n"
+    "                 stage1_min_samples_per_epoch stage1_max_samples_per_epoch\n"
+    "                 stage1_max_validation_samples stage1_label_gate_m\n"
+    "                 stage1_label_gate_deg stage2_lr stage2_batch stage2_sequence_windows\n"
+    "                 stage2_max_epochs stage2_patience stage2_plateau_epochs\n"
+    "                 stage2_min_steps_per_epoch modality_dropout window_dropout d_model\n"
+    "                 layers selection_weight selection_radius_m filter_preference_m\n"
+    "                 offset_calibration_radius_m position_loss (mixture|mean)\n"
+    "  --config-set P=V  override the training config's value at JSON pointer P\n"
+    "  --quick        a small model in under 3 minutes (17 dry episodes of 10 s; fewer\n"
+    "                 epochs and a larger step as config defaults, which --config overrides)\n"
     "  --episodes N   trajectories to simulate (default 40, at least 3)\n"
     "  --episode-s S  simulated seconds each (default 20)\n"
     "  --seed N       seeds the episodes, the split and the weights (default 1)\n"
-    "  --lr RATE      Adam's learning rate for both stages (default 1e-3; see NOTES.md)\n"
     "  --bottleneck B ib (default: the paper's IB-CC head, mu/sigma and KL) or mlp (its\n"
     "                 MLP baseline of equal depth and parameter count, no KL)\n"
     "  --head H       anchored (default: the Mamba output picks among the nodes' geometric\n"
     "                 anchors; see NOTES.md) or paper (its linear head)\n"
-    "  --selection-weight W  anchored head: weight of the candidate-selection loss\n"
-    "                 (default 1; 0: position MSE only)\n"
-    "  --filter-preference M  anchored head: the selection target is the filter's track\n"
-    "                 when it is at most M metres farther from the truth than the nearest\n"
-    "                 candidate (default 2; 0: the nearest)\n"
-    "  --offset-calibration M  anchored head: subtract from each candidate its median\n"
-    "                 offset from the truth over the training windows where it is within\n"
-    "                 M metres, at most 1 (default 1; 0: none)\n"
-    "  --plateau N    halve the stage-2 learning rate after N epochs without a better\n"
-    "                 validation loss (default 6; 0: never)\n"
-    "  --position-loss L  anchored head: mixture (default: the weighted candidates' expected\n"
-    "                 squared error) or mean (the squared error of their weighted mean)\n"
     "  --threads N    LibTorch threads (default 1); results depend on it\n"
     "  --data FILE    the simulated episodes: read FILE if it exists (no simulation),\n"
     "                 else simulate and write it (train again without simulating)\n"
-    "  --label-gate M,DEG  leave out of stage 1 the LiDAR/radar clusters whose centroid\n"
-    "                 is over M metres from the truth and camera ROIs over DEG degrees\n"
-    "                 off it (default off; see NOTES.md)\n"
-    "  --force        replace an existing MODEL folder\n";
+    "  --set P=V      override the scenario's value at JSON pointer P\n"
+    "  --force        replace an existing MODEL folder\n"
+    "\n"
+    "--lr, --selection-weight, --filter-preference, --offset-calibration, --plateau,\n"
+    "--position-loss and --label-gate were replaced by training config keys (issue 17).\n";
 
 const char* kBenchHelp =
     "usage: uavsim bench [raycast|radar|events|link|beam|pipeline|all] [--quiet]\n"
@@ -329,14 +329,42 @@ double NumberOption(const std::string& cmd, const std::string& name, const std::
   return x;
 }
 
+// Tuning flags that the training config replaced (issue 17): flag -> its keys.
+const std::map<std::string, std::string>& ReplacedTrainFlags() {
+  static const std::map<std::string, std::string> replaced{
+      {"--lr", "stage1_lr and stage2_lr"},
+      {"--selection-weight", "selection_weight"},
+      {"--filter-preference", "filter_preference_m"},
+      {"--offset-calibration", "offset_calibration_radius_m"},
+      {"--plateau", "stage2_plateau_epochs"},
+      {"--position-loss", "position_loss"},
+      {"--label-gate", "stage1_label_gate_m and stage1_label_gate_deg"},
+  };
+  return replaced;
+}
+
 int Train(int argc, char** argv) {
+  std::set<std::string> value_options{"--out",     "--seed",   "--episodes",  "--episode-s",
+                                      "--threads", "--set",    "--data",      "--bottleneck",
+                                      "--head",    "--config", "--config-set"};
+  const auto refuse_replaced = [](const std::string& flag) {
+    const auto it = ReplacedTrainFlags().find(flag);
+    if (it == ReplacedTrainFlags().end()) return;
+    const std::string& keys = it->second;
+    throw UsageError("uavsim train: " + flag + " was replaced by the training config key" +
+                     (keys.find(" and ") == std::string::npos ? " " : "s ") + keys +
+                     " (--config FILE or --config-set /" + keys.substr(0, keys.find(' ')) +
+                     "=VALUE; see uavsim train --help)");
+  };
+  // Parsed as value options so that they are refused by name below (and
+  // refused by name when last, where Parse would ask for their value).
+  for (const auto& [flag, keys] : ReplacedTrainFlags()) value_options.insert(flag);
+  if (argc > 2) refuse_replaced(argv[argc - 1]);
   const ParsedArgs a =
-      Parse("train", argc, argv, 2,
-            {"--out", "--seed", "--episodes", "--episode-s", "--threads", "--set", "--data", "--lr",
-             "--bottleneck", "--label-gate", "--head", "--selection-weight", "--filter-preference",
-             "--plateau", "--position-loss", "--offset-calibration"},
-            {"--quick", "--quiet", "--force", "--help"});
+      Parse("train", argc, argv, 2, value_options, {"--quick", "--quiet", "--force", "--help"});
   if (a.Has("--help")) return std::cout << kTrainHelp, kExitOk;
+  for (const auto& [flag, keys] : ReplacedTrainFlags())
+    if (a.Has(flag)) refuse_replaced(flag);
   const std::string& file = OneScenario("train", a);
   uavsim::sim::TrainCommand c;
   c.scenario_file = file;
@@ -356,45 +384,19 @@ int Train(int argc, char** argv) {
       throw UsageError("uavsim train: --bottleneck expects ib or mlp, got '" + *v + "'");
     c.mlp_bottleneck = *v == "mlp";
   }
-  if (auto v = a.Value("--selection-weight"))
-    c.selection_weight =
-        NumberOption("train", "--selection-weight", *v, 0.0, 100.0, "a number in [0, 100]");
-  if (auto v = a.Value("--filter-preference"))
-    c.filter_preference_m =
-        NumberOption("train", "--filter-preference", *v, 0.0, 100.0, "metres in [0, 100]");
-  if (auto v = a.Value("--offset-calibration"))
-    c.offset_calibration_radius_m =
-        NumberOption("train", "--offset-calibration", *v, 0.0, 1.0, "metres in [0, 1]");
-  if (auto v = a.Value("--plateau"))
-    c.plateau_epochs = static_cast<int>(UnsignedOption("train", "--plateau", *v, 10000));
-  if (auto v = a.Value("--position-loss")) {
-    if (*v != "mixture" && *v != "mean")
-      throw UsageError("uavsim train: --position-loss expects mixture or mean, got '" + *v + "'");
-    c.position_loss = *v;
-  }
   if (auto v = a.Value("--head")) {
     if (*v != "anchored" && *v != "paper")
       throw UsageError("uavsim train: --head expects anchored or paper, got '" + *v + "'");
     c.paper_head = *v == "paper";
   }
-  if (auto v = a.Value("--label-gate")) {
-    char* end = nullptr;
-    c.label_gate_m = std::strtod(v->c_str(), &end);
-    const bool comma = *end == ',';
-    if (comma) c.label_gate_deg = std::strtod(end + 1, &end);
-    if (!comma || *end != '\0' || !(c.label_gate_m >= 0 && c.label_gate_m <= 1e4) ||
-        !(c.label_gate_deg >= 0 && c.label_gate_deg <= 180))
-      throw UsageError(
-          "uavsim train: --label-gate expects M,DEG (metres >= 0, degrees 0..180), got '" + *v +
-          "'");
-  }
-  if (auto v = a.Value("--lr"))
-    c.learning_rate = NumberOption("train", "--lr", *v, std::nextafter(0.0, 1.0), 1.0,
-                                   "a learning rate in (0, 1]");
   if ((a.Value("--episodes") && c.episodes < 3) || (a.Value("--threads") && c.threads < 1))
     throw UsageError(
         "uavsim train: --episodes needs at least 3 (training, validation, test) and --threads "
         "at least 1");
+  const auto config_sets = a.values.find("--config-set");
+  c.training = uavsim::sim::ResolveTrainingConfig(
+      c.quick, a.Value("--config").value_or(""),
+      config_sets == a.values.end() ? std::vector<std::string>{} : config_sets->second);
   c.command_line = "uavsim";
   for (int i = 1; i < argc; ++i) c.command_line += " " + std::string(argv[i]);
   const uavsim::sim::Scenario s = uavsim::sim::LoadScenario(file, Overrides(a));

@@ -171,48 +171,54 @@ pipeline::Dataset SplitByTrajectory(std::vector<pipeline::Episode> episodes, std
   return d;
 }
 
+TrainDefaults Defaults(bool quick) {
+  TrainDefaults d;
+  if (!quick) return d;
+  // A small model in well under 3 minutes on 2 cores, for tests.
+  // 17: the smallest count whose 15 % validation split is 3 episodes
+  // (12 gave 2, and a validation loss that moved 9x-12x between
+  // trainings that differed little).
+  d.plan.episodes = 17;
+  d.plan.episode_s = 10.0;
+  d.plan.vary_weather = false;
+  pipeline::TrainingConfig& t = d.training;
+  t.stage1_max_epochs = 16;
+  t.stage1_patience = 8;
+  t.stage1_min_samples_per_epoch = 480;
+  t.stage1_max_samples_per_epoch = 480;
+  t.stage1_max_validation_samples = 512;
+  t.stage2_max_epochs = 40;
+  t.stage2_patience = 10;
+  t.stage2_sequence_windows = 30;
+  // A larger step for the short run, and fewer camera epochs to stay under
+  // 3 minutes: with the anchor filter's track the untrained head's blend
+  // starts lower, and 1e-3 left the fusion validation loss 9.6x below it;
+  // 2e-3 with 16 camera epochs 14x (NOTES.md 2026-11-22 (6)).
+  t.stage1_lr = t.stage2_lr = 2e-3;
+  return d;
+}
+
+pipeline::TrainingConfig ResolveTrainingConfig(bool quick, const std::string& config_file,
+                                               const std::vector<std::string>& overrides) {
+  core::Json doc = core::Json::object();
+  if (!config_file.empty()) doc = core::LoadJsonFile(config_file);
+  for (const std::string& o : overrides) ApplyOverride(doc, o);
+  const std::string name = config_file.empty() ? "--config-set" : config_file;
+  return pipeline::TrainingConfigFromJson(doc, name, Defaults(quick).training);
+}
+
 pipeline::TrainReport RunTraining(const Scenario& base, const TrainCommand& c) {
-  EpisodePlan plan;
+  EpisodePlan plan = Defaults(c.quick).plan;
   plan.seed = c.seed;
   pipeline::TrainOptions t;
+  static_cast<pipeline::TrainingConfig&>(t) = c.training;
   t.seed = c.seed;
   t.quiet = c.quiet;
   t.check_stop = ThrowIfInterrupted;
   t.latent_dim = base.pipeline.latent_dim;
   t.window_s = base.pipeline.window_s;
-  if (c.quick) {
-    // A small model in well under 3 minutes on 2 cores, for tests.
-    // 17: the smallest count whose 15 % validation split is 3 episodes
-    // (12 gave 2, and a validation loss that moved 9x-12x between
-    // trainings that differed little).
-    plan.episodes = 17;
-    plan.episode_s = 10.0;
-    plan.vary_weather = false;
-    t.stage1_max_epochs = 16;
-    t.stage1_patience = 8;
-    t.stage1_min_samples_per_epoch = 480;
-    t.stage1_max_samples_per_epoch = 480;
-    t.stage1_max_validation_samples = 512;
-    t.stage2_max_epochs = 40;
-    t.stage2_patience = 10;
-    t.stage2_sequence_windows = 30;
-    // A larger step for the short run, and fewer camera epochs to stay under
-    // 3 minutes: with the anchor filter's track the untrained head's blend
-    // starts lower, and 1e-3 left the fusion validation loss 9.6x below it;
-    // 2e-3 with 16 camera epochs 14x (NOTES.md 2026-11-22 (6)).
-    t.stage1_lr = t.stage2_lr = 2e-3;
-  }
-  if (c.learning_rate > 0) t.stage1_lr = t.stage2_lr = c.learning_rate;
   if (c.mlp_bottleneck) t.bottleneck = pipeline::IbBottleneck::kMlp;
   t.anchored = !c.paper_head;
-  if (c.selection_weight >= 0) t.selection_weight = c.selection_weight;
-  if (c.filter_preference_m >= 0) t.filter_preference_m = c.filter_preference_m;
-  if (c.offset_calibration_radius_m >= 0)
-    t.offset_calibration_radius_m = c.offset_calibration_radius_m;
-  if (c.plateau_epochs >= 0) t.stage2_plateau_epochs = c.plateau_epochs;
-  if (!c.position_loss.empty()) t.mixture_loss = c.position_loss == "mixture";
-  t.stage1_label_gate_m = c.label_gate_m;
-  t.stage1_label_gate_deg = c.label_gate_deg;
   if (c.episodes > 0) plan.episodes = c.episodes;
   if (c.episode_s > 0) plan.episode_s = c.episode_s;
 

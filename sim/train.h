@@ -8,9 +8,11 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "pipeline/training/dataset.h"
 #include "pipeline/training/trainer.h"
+#include "pipeline/training/training_config.h"
 #include "sim/scenario.h"
 
 namespace uavsim::sim {
@@ -41,26 +43,35 @@ std::vector<pipeline::Episode> SimulateEpisodes(const Scenario& base, const Epis
 // where is a seeded shuffle.
 pipeline::Dataset SplitByTrajectory(std::vector<pipeline::Episode> episodes, std::uint64_t seed);
 
+// What --quick changes, in one place: the defaults of the episode plan and of
+// the training config, which a config file then overrides. quick = false: the
+// plain defaults.
+struct TrainDefaults {
+  EpisodePlan plan;
+  pipeline::TrainingConfig training;
+};
+TrainDefaults Defaults(bool quick);
+
+// The training config of a command: Defaults(quick).training, then the JSON
+// file `config_file` (if not empty), then the "/json/pointer=value"
+// overrides (as for scenarios, ApplyOverride). Throws core::ConfigError
+// naming the file (or --config-set) and the pointer.
+pipeline::TrainingConfig ResolveTrainingConfig(bool quick, const std::string& config_file,
+                                               const std::vector<std::string>& overrides = {});
+
 struct TrainCommand {
   std::string scenario_file;
   std::string out_dir;  // the model folder
   bool force = false;
-  bool quick = false;
+  bool quick = false;  // Defaults(true).plan (and `training` resolved with quick)
   bool quiet = false;
   std::uint64_t seed = 1;
-  int episodes = 0;                   // 0: the default for quick / full
-  double episode_s = 0.0;             // 0: the default for quick / full
-  double learning_rate = 0.0;         // 0: the trainer's default
+  int episodes = 0;                   // 0: the plan's default
+  double episode_s = 0.0;             // 0: the plan's default
   bool mlp_bottleneck = false;        // the paper's MLP baseline instead of the IB head
   bool paper_head = false;            // the paper's linear edge head instead of the anchored one
-  double selection_weight = -1.0;     // < 0: TrainOptions' default
-  double filter_preference_m = -1.0;  // < 0: TrainOptions' default
-  double offset_calibration_radius_m = -1.0;  // < 0: TrainOptions' default; 0: none
-  int plateau_epochs = -1;                    // < 0: TrainOptions' default
-  std::string position_loss;                  // mixture or mean; empty: TrainOptions' default
-  double label_gate_m = 0.0;  // stage 1 label gate (pipeline/training/trainer.h); 0: off
-  double label_gate_deg = 0.0;
-  int threads = 1;  // LibTorch intra-op threads (see NOTES.md: 1 is fastest here)
+  pipeline::TrainingConfig training;  // as ResolveTrainingConfig gives it
+  int threads = 1;                    // LibTorch intra-op threads (see NOTES.md: 1 is fastest here)
   // Episode file: read if it exists (no simulation), else written after
   // simulating. Empty: simulate, keep nothing.
   std::string data_file;

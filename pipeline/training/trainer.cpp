@@ -561,39 +561,16 @@ core::Json EvaluationJson(const Evaluation& ev) {
 }  // namespace
 
 void TrainOptions::Validate() const {
+  try {
+    CheckTrainingConfig(*this, "TrainOptions");
+  } catch (const core::ConfigError& e) {
+    throw std::invalid_argument(e.what());
+  }
   const auto require = [](bool ok, const char* field, const std::string& rule) {
     if (!ok) throw std::invalid_argument(std::string("TrainOptions: ") + field + " " + rule);
   };
   require(latent_dim >= 2 && latent_dim % 2 == 0, "latent_dim", "must be even and >= 2");
   require(window_s > 0 && std::isfinite(window_s), "window_s", "must be > 0");
-  require(dropout >= 0 && dropout < 1, "dropout", "must be in [0, 1)");
-  require(beta >= 0 && std::isfinite(beta), "beta", "must be >= 0");
-  require(stage1_lr > 0 && stage2_lr > 0, "stage1_lr and stage2_lr", "must be > 0");
-  require(stage1_batch >= 2 && stage2_batch >= 1, "stage1_batch and stage2_batch",
-          "must be >= 2 and >= 1");
-  require(stage1_max_epochs >= 0 && stage2_max_epochs >= 0, "max_epochs", "must be >= 0");
-  require(stage1_patience >= 1 && stage2_patience >= 1, "patience", "must be >= 1");
-  require(stage1_min_samples_per_epoch >= 2 &&
-              stage1_max_samples_per_epoch >= stage1_min_samples_per_epoch,
-          "stage1_min/max_samples_per_epoch", "must satisfy 2 <= min <= max");
-  require(stage1_max_validation_samples >= 1, "stage1_max_validation_samples", "must be >= 1");
-  require(stage1_label_gate_m >= 0 && stage1_label_gate_deg >= 0 && stage1_label_gate_deg <= 180,
-          "stage1_label_gate_m and stage1_label_gate_deg", "must be >= 0 (degrees at most 180)");
-  require(stage2_sequence_windows >= 1 && stage2_min_steps_per_epoch >= 1,
-          "stage2_sequence_windows and stage2_min_steps_per_epoch", "must be >= 1");
-  require(
-      modality_dropout >= 0 && modality_dropout <= 1 && window_dropout >= 0 && window_dropout <= 1,
-      "modality_dropout and window_dropout", "must be in [0, 1]");
-  require(d_model >= 1 && layers >= 1, "d_model and layers", "must be >= 1");
-  require(stage2_plateau_epochs >= 0, "stage2_plateau_epochs", "must be >= 0");
-  require(selection_weight >= 0 && std::isfinite(selection_weight) && selection_radius_m > 0 &&
-              std::isfinite(selection_radius_m) && filter_preference_m >= 0 &&
-              std::isfinite(filter_preference_m),
-          "selection_weight, selection_radius_m and filter_preference_m",
-          "must be finite, >= 0, > 0 and >= 0");
-  // The model keeps offsets within 1 m per axis (kMaxCandidateOffset_m).
-  require(offset_calibration_radius_m >= 0 && offset_calibration_radius_m <= 1.0,
-          "offset_calibration_radius_m", "must be in [0, 1] m");
 }
 
 TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& o, const ModelManifest& manifest,
@@ -650,6 +627,7 @@ TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& o, const ModelM
   ModelManifest m = manifest;
   m.latent_dim = o.latent_dim;
   m.window_s = o.window_s;
+  m.training = static_cast<const TrainingConfig&>(o);
   const std::string* names[kModalityCount] = {&m.camera, &m.lidar, &m.radar};
   for (int i = 0; i < kModalityCount; ++i)
     SaveIbCcModel(encoders[static_cast<std::size_t>(i)], (out / *names[i]).string(), m.note);

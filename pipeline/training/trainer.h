@@ -20,90 +20,30 @@
 #include "pipeline/model_bundle.h"
 #include "pipeline/node/ib_cc_config.h"
 #include "pipeline/training/dataset.h"
+#include "pipeline/training/training_config.h"
 
 namespace uavsim::pipeline {
 
-struct TrainOptions {
+// What one training run needs: the tuning knobs (TrainingConfig, data read
+// from a config file) and what the caller decides per run.
+struct TrainOptions : TrainingConfig {
   std::uint64_t seed = 1;
   bool quiet = false;  // no progress lines
   int latent_dim = 16;
   double window_s = 0.2;
-  double dropout = 0.1;  // paper Sec. VI
-  double beta = 1e-3;    // paper Sec. VI
   // The node's compressor: the paper's IB head, or its MLP baseline of equal
   // depth and parameter count (the Sec. VI ablation).
   IbBottleneck bottleneck = IbBottleneck::kIb;
-  // Stage 1 (per modality).
-  double stage1_lr = 1e-3;
-  int stage1_batch = 32;
-  int stage1_max_epochs = 30;
-  int stage1_patience = 6;
-  int stage1_min_samples_per_epoch = 640;    // small data sets are cycled ...
-  int stage1_max_samples_per_epoch = 3000;   // ... large ones sampled
-  int stage1_max_validation_samples = 1024;  // evenly spaced over the validation episodes
-  // Stage 1 learns where the target is in what a node saw; an observation
-  // of something else (a LiDAR or radar cluster of weather returns, a
-  // camera ROI on a bird) has no such answer, so its label is noise. Such
-  // observations are left out of stage 1 (not of stage 2, which must learn
-  // to discount them, nor of any evaluation): a point cluster whose centroid
-  // lies farther than stage1_label_gate_m from the truth, a camera ROI whose
-  // left bearing is off the truth's direction by more than
-  // stage1_label_gate_deg. 0: keep everything (the default: measured worse
-  // fused, see NOTES.md).
-  double stage1_label_gate_m = 0.0;
-  double stage1_label_gate_deg = 0.0;
-  // Stage 2.
-  double stage2_lr = 1e-3;
-  int stage2_batch = 16;
-  int stage2_sequence_windows = 60;  // K of a training crop
-  int stage2_max_epochs = 150;
-  int stage2_patience = 20;
-  // Halve the stage-2 learning rate after this many epochs without a better
-  // validation loss (0: never; 6 measured better, NOTES.md).
-  int stage2_plateau_epochs = 6;
-  int stage2_min_steps_per_epoch = 20;
-  double modality_dropout = 0.2;  // P(a modality is missing for a whole crop)
-  double window_dropout = 0.1;    // P(a modality is missing in one window)
-  // Called before every optimisation step; may throw to stop training
-  // (the CLI's Ctrl-C). Empty: never stops.
-  std::function<void()> check_stop;
-  // Edge network sizes (paper silent; DESIGN.md: d_state 16, d_conv 4, expand 2).
-  int d_model = 64;
-  int layers = 2;
   // The edge head: anchored (default; pipeline/anchored/anchors.h, measured in
   // NOTES.md) or the paper's plain linear head (false).
   bool anchored = true;
-  // Anchored head: weight of the candidate-selection loss added to the
-  // position loss, the cross-entropy of the candidate weights against the
-  // valid candidate nearest the truth when it is within selection_radius_m,
-  // else the free one (it teaches the choice directly; the MSE alone left
-  // the weights spread, NOTES.md). 0: position loss only.
-  double selection_weight = 1.0;
-  double selection_radius_m = 2.0;
-  // The filter's track (pipeline/anchored/anchor_filter.h) is the target whenever it
-  // is at most this much farther from the truth than the nearest candidate:
-  // which single fix happens to be nearest in a window is luck the features
-  // cannot tell, the filtered track is right on average (NOTES.md
-  // 2026-11-22 (6); 1 m since the IMM track, (7); 2 m since (8): the head
-  // then follows the track where it blended in worse fixes). 0: the nearest.
-  double filter_preference_m = 2.0;
-  // Anchored head: calibrate each candidate's offset from the target's
-  // reference point (the median over the training windows in which it is
-  // within this radius of the truth, MedianCandidateOffsets; the model
-  // subtracts it, NOTES.md 2026-11-22 (8)). 0: no calibration.
-  double offset_calibration_radius_m = 1.0;
-  // A candidate valid and within the radius in fewer training windows keeps
-  // a zero offset.
-  static constexpr std::size_t kMinOffsetWindows = 50;
-  // Anchored head: the position loss. true: the expected squared error of
-  // the weighted hypotheses, sum_h w_h |c_h - y|^2 (a mixture: weight on a
-  // far candidate costs its whole error, so the weights concentrate on the
-  // good ones); false: the squared error of the weighted mean |sum_h w_h
-  // c_h - y|^2 (a hedge between two far candidates costs little). The
-  // validation loss is the weighted mean's in both cases.
-  bool mixture_loss = true;
+  // Called before every optimisation step; may throw to stop training
+  // (the CLI's Ctrl-C). Empty: never stops.
+  std::function<void()> check_stop;
 
-  // Throws std::invalid_argument naming the first bad field.
+  // Throws std::invalid_argument naming the first bad field: the
+  // TrainingConfig rules (training_config.h), then latent_dim (even, >= 2)
+  // and window_s (> 0).
   void Validate() const;
 };
 
@@ -134,7 +74,8 @@ struct TrainReport {
 };
 
 // Trains on `data` and writes the model folder `out_dir` (model.json from
-// `manifest` with latent_dim and window_s set from the options, the parts,
+// `manifest` with latent_dim, window_s and the training config set from the
+// options, the parts,
 // training_report.json; checkpoints under out_dir/checkpoints while
 // training, removed at the end). Seeds LibTorch's generator with
 // options.seed first; call InitTorch() before. A modality with observations

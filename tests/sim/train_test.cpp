@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <chrono>
 #include <cmath>
@@ -14,10 +15,12 @@
 #include <set>
 #include <sstream>
 #include <thread>
+#include <tuple>
 
 #include "pipeline/model_bundle.h"
 #include "pipeline/torch_runtime.h"
 #include "pipeline/training/trainer.h"
+#include "pipeline/training/training_config.h"
 #include "results/csv.h"
 #include "sim/core/json_io.h"
 #include "sim/train.h"
@@ -28,6 +31,7 @@ using uavsim::core::Json;
 using uavsim::testing::ReadFile;
 using uavsim::testing::RunCli;
 using uavsim::testing::TempDir;
+using uavsim::testing::WriteFile;
 
 namespace {
 const std::string kDefault = std::string(UAVSIM_SOURCE_DIR) + "/scenarios/default.json";
@@ -74,6 +78,14 @@ TEST_CASE("CLI: train --quick learns, is deterministic, and its model runs in th
   CHECK_THAT(manifest["note"].get<std::string>(), Catch::Contains("--quick"));
   CHECK_THAT(manifest["note"].get<std::string>(), Catch::Contains("seed 1"));
   CHECK(manifest["latent_dim"] == 16);
+  // The resolved training config: every key, --quick's own defaults included.
+  const Json defaults = uavsim::pipeline::TrainingConfigJson({});
+  REQUIRE(manifest.contains("training"));
+  CHECK(manifest["training"].size() == defaults.size());
+  CHECK(manifest["training"].dump() ==
+        uavsim::pipeline::TrainingConfigJson(uavsim::sim::Defaults(true).training).dump());
+  CHECK(manifest["training"]["stage1_lr"] == 2e-3);
+  CHECK(manifest["training"]["filter_preference_m"] == defaults["filter_preference_m"]);
 
   // Training again from the saved episodes gives the same weights.
   const std::string again = dir + "/again";
@@ -151,20 +163,29 @@ TEST_CASE("CLI: train and run refuse what they cannot use, naming it", "[sim][tr
   auto bottleneck = RunCli({"train", kDefault, "--bottleneck", "cnn", "--out", dir + "/m"});
   CHECK(bottleneck.exit_code == 2);
   CHECK_THAT(bottleneck.err, Catch::Contains("--bottleneck"));
-  for (const std::vector<std::string>& bad : {std::vector<std::string>{"--head", "linear"},
-                                              {"--selection-weight", "-1"},
-                                              {"--selection-weight", "x"},
-                                              {"--filter-preference", "-0.1"},
-                                              {"--offset-calibration", "-1"},
-                                              {"--offset-calibration", "1.5"},
-                                              {"--plateau", "-2"},
-                                              {"--position-loss", "l1"}}) {
-    std::vector<std::string> args{"train", kDefault, "--out", dir + "/m"};
-    args.insert(args.end(), bad.begin(), bad.end());
-    const auto r = RunCli(args);
-    INFO(bad[0] << " " << bad[1]);
+  auto head = RunCli({"train", kDefault, "--head", "linear", "--out", dir + "/m"});
+  CHECK(head.exit_code == 2);
+  CHECK_THAT(head.err, Catch::Contains("--head"));
+  // The tuning knobs are keys of the training config: a bad value names the
+  // file, the key's pointer, the value and the rule, on one line.
+  for (const auto& [key, value] :
+       std::vector<std::pair<std::string, std::string>>{{"selection_weight", "-1"},
+                                                        {"selection_weight", "\"x\""},
+                                                        {"filter_preference_m", "-0.1"},
+                                                        {"offset_calibration_radius_m", "-1"},
+                                                        {"offset_calibration_radius_m", "1.5"},
+                                                        {"stage2_plateau_epochs", "-2"},
+                                                        {"stage1_lr", "0"},
+                                                        {"stage1_label_gate_deg", "200"},
+                                                        {"position_loss", "\"l1\""}}) {
+    const std::string config = dir + "/bad.json";
+    WriteFile(config, "{\"" + key + "\": " + value + "}");
+    const auto r = RunCli({"train", kDefault, "--out", dir + "/m", "--config", config});
+    INFO(key << " " << value << ": " << r.err);
     CHECK(r.exit_code == 2);
-    CHECK_THAT(r.err, Catch::Contains(bad[0]));
+    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+    CHECK_THAT(r.err, Catch::StartsWith(config + ": /" + key + ": expected "));
+    CHECK_THAT(r.err, Catch::Contains(", got " + value));
   }
   CHECK_FALSE(fs::exists(dir + "/m"));
 
@@ -179,6 +200,86 @@ TEST_CASE("CLI: train and run refuse what they cannot use, naming it", "[sim][tr
   CHECK_THAT(z8.err, Catch::Contains("/pipeline/latent_dim"));
   CHECK_THAT(z8.err, Catch::Contains("uavsim train"));
   CHECK_FALSE(fs::exists(dir + "/r"));
+}
+
+TEST_CASE("CLI: train reads its tuning from --config; the old flags name their keys",
+          "[sim][train]") {
+  const std::string dir = TempDir("train-config");
+  // A misspelt key: did you mean, one line, exit 2, nothing written.
+  WriteFile(dir + "/typo.json", "{\"selection_weigth\": 2}");
+  auto typo = RunCli({"train", kDefault, "--out", dir + "/m", "--config", dir + "/typo.json"});
+  CHECK(typo.exit_code == 2);
+  CHECK(typo.err == dir +
+                        "/typo.json: /selection_weigth: unknown key (did you mean "
+                        "\"selection_weight\"?)\n");
+  // --config-set overrides the file, and is checked as strictly.
+  auto set = RunCli({"train", kDefault, "--out", dir + "/m", "--config",
+                     std::string(UAVSIM_SOURCE_DIR) + "/scenarios/training/default.json",
+                     "--config-set", "/window_dropout=2"});
+  CHECK(set.exit_code == 2);
+  CHECK_THAT(set.err, Catch::EndsWith("/window_dropout: expected a number in [0, 1], got 2\n"));
+  CHECK(std::count(set.err.begin(), set.err.end(), '\n') == 1);
+  auto missing = RunCli({"train", kDefault, "--out", dir + "/m", "--config", dir + "/none.json"});
+  CHECK(missing.exit_code == 2);
+  CHECK_THAT(missing.err, Catch::StartsWith(dir + "/none.json"));
+  // The flags the config replaced: refused by name, with the key instead.
+  for (const auto& [flag, value, key] :
+       std::vector<std::tuple<std::string, std::string, std::string>>{
+           {"--lr", "1e-3", "stage1_lr and stage2_lr"},
+           {"--selection-weight", "1", "selection_weight"},
+           {"--filter-preference", "2", "filter_preference_m"},
+           {"--offset-calibration", "1", "offset_calibration_radius_m"},
+           {"--plateau", "6", "stage2_plateau_epochs"},
+           {"--position-loss", "mean", "position_loss"},
+           {"--label-gate", "3,3", "stage1_label_gate_m and stage1_label_gate_deg"}}) {
+    const auto r = RunCli({"train", kDefault, "--out", dir + "/m", flag, value});
+    INFO(flag << ": " << r.err);
+    CHECK(r.exit_code == 2);
+    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+    CHECK_THAT(r.err, Catch::StartsWith("uavsim train: " + flag + " was replaced by"));
+    CHECK_THAT(r.err, Catch::Contains(key));
+    CHECK_THAT(r.err, Catch::Contains("--config"));
+  }
+  CHECK_FALSE(fs::exists(dir + "/m"));
+  // --help names every key and the file that spells them out.
+  const auto help = RunCli({"train", "--help"});
+  CHECK(help.exit_code == 0);
+  CHECK_THAT(help.out, Catch::Contains("scenarios/training/default.json"));
+  const Json keys = uavsim::pipeline::TrainingConfigJson({});
+  for (const auto& [key, value] : keys.items()) {
+    INFO(key);
+    CHECK_THAT(help.out, Catch::Contains(key));
+  }
+}
+
+TEST_CASE("Training config: defaults, --quick's overrides, then the file, then --config-set",
+          "[sim][train]") {
+  using uavsim::pipeline::TrainingConfigJson;
+  using uavsim::sim::ResolveTrainingConfig;
+  const std::string dir = TempDir("train-config-resolve");
+  // No file: the defaults; --quick changes its own keys only.
+  CHECK(TrainingConfigJson(ResolveTrainingConfig(false, "")).dump() ==
+        TrainingConfigJson({}).dump());
+  const auto quick = ResolveTrainingConfig(true, "");
+  CHECK(quick.stage1_lr == 2e-3);
+  CHECK(quick.stage2_lr == 2e-3);
+  CHECK(quick.stage2_max_epochs == 40);
+  CHECK(quick.filter_preference_m == uavsim::pipeline::TrainingConfig{}.filter_preference_m);
+  CHECK(uavsim::sim::Defaults(true).plan.episodes == 17);
+  CHECK(uavsim::sim::Defaults(false).plan.episodes == uavsim::sim::EpisodePlan{}.episodes);
+  // {} is a valid file; a file's keys win over --quick's, --config-set over both.
+  WriteFile(dir + "/empty.json", "{}");
+  CHECK(TrainingConfigJson(ResolveTrainingConfig(false, dir + "/empty.json")).dump() ==
+        TrainingConfigJson({}).dump());
+  WriteFile(dir + "/t.json", "{\"stage1_lr\": 5e-4, \"position_loss\": \"mean\"}");
+  const auto t = ResolveTrainingConfig(true, dir + "/t.json", {"/position_loss=mixture"});
+  CHECK(t.stage1_lr == 5e-4);
+  CHECK(t.stage2_lr == 2e-3);
+  CHECK(t.mixture_loss);
+  const auto set_only = ResolveTrainingConfig(false, "", {"/stage2_plateau_epochs=0"});
+  CHECK(set_only.stage2_plateau_epochs == 0);
+  CHECK(uavsim::testing::ConfigErrorOf([&] { ResolveTrainingConfig(false, "", {"/layers=0"}); }) ==
+        "--config-set: /layers: expected an integer in [1, 64], got 0");
 }
 
 TEST_CASE("Training episodes are split by trajectory, 70/15/15", "[sim][train]") {

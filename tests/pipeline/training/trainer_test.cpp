@@ -289,6 +289,14 @@ TEST_CASE("Trainer: writes a complete model folder and an honest report", "[pipe
   CHECK(m.layout_hash == "0123abcd");
   CHECK(m.latent_dim == 8);
   CHECK(m.window_s == kWindow);
+  // ... and the training config it ran with, every key resolved.
+  REQUIRE(m.training.has_value());
+  CHECK(TrainingConfigJson(*m.training).dump() ==
+        TrainingConfigJson(static_cast<const TrainingConfig&>(o)).dump());
+  const core::Json raw = core::Json::parse(testing::ReadFile(t.dir + "/model.json"));
+  CHECK(raw.at("training").size() == TrainingConfigJson(TrainingConfig{}).size());
+  CHECK(raw.at("training").at("stage1_max_epochs") == o.stage1_max_epochs);
+  CHECK(raw.at("training").at("position_loss") == "mixture");
 
   // And the folder loads as a model.
   InitTorch(1, kSeed);
