@@ -16,94 +16,85 @@
 namespace uavsim::sim {
 namespace {
 
+// What every node sensor needs besides its model: its node's id, the
+// weather, the world it poses, and where it records (null: nowhere).
+struct SensorContext {
+  const std::string& id;
+  const core::WeatherConfig& weather;
+  WorldModel& world;
+  Recorder* recorder;
+};
+
 class CameraNodeSensor final : public NodeSensor {
  public:
-  CameraNodeSensor(const NodeConfig& node, const Scenario& s, WorldModel& world, Recorder* recorder)
-      : id_(node.id),
-        weather_(s.weather),
-        world_(world),
-        recorder_(recorder),
-        camera_(node.sensor.fisheye, world.scene()),
+  CameraNodeSensor(const NodeConfig& node, const Scenario& s, SensorContext c)
+      : c_(c),
+        camera_(node.sensor.fisheye, c.world.scene()),
         preprocess_(node.sensor.fisheye, s.pipeline.preprocess) {
+    WorldModel& world = c.world;
     camera_.set_small_objects([&world](double t_s) { return world.SmallObjects(t_s); });
   }
 
  private:
   NodeFrame DoCapture(double t_s, core::RngStream& noise) override {
-    world_.scene().SetTime(t_s);
-    const sensors::StereoFrame frame = camera_.Capture(t_s, weather_, noise);
-    if (recorder_) recorder_->RecordCamera(id_, frame);
-    NodeFrame out;
-    out.raw_bytes = frame.RawBytes();
+    c_.world.scene().SetTime(t_s);
+    const sensors::StereoFrame frame = camera_.Capture(t_s, c_.weather, noise);
+    if (c_.recorder) c_.recorder->RecordCamera(c_.id, frame);
+    NodeFrame out{frame.RawBytes(), {}};
     out.content.camera = preprocess_.Process(frame);
     return out;
   }
 
-  const std::string& id_;
-  const core::WeatherConfig& weather_;
-  WorldModel& world_;
-  Recorder* recorder_;
+  SensorContext c_;
   sensors::FisheyeStereo camera_;
   pipeline::CameraPreprocessor preprocess_;
 };
 
 class LidarNodeSensor final : public NodeSensor {
  public:
-  LidarNodeSensor(const NodeConfig& node, const Scenario& s, WorldModel& world, Recorder* recorder)
-      : id_(node.id),
-        weather_(s.weather),
-        recorder_(recorder),
-        lidar_(node.sensor.lidar, world.scene()),
+  LidarNodeSensor(const NodeConfig& node, const Scenario& s, SensorContext c)
+      : c_(c),
+        lidar_(node.sensor.lidar, c.world.scene()),
         preprocess_(node.sensor.lidar, s.pipeline.preprocess) {}
 
  private:
   // The LiDAR poses the scene at each point's own time.
   NodeFrame DoCapture(double t_s, core::RngStream& noise) override {
-    const sensors::PointCloudFrame frame = lidar_.Capture(t_s, weather_, noise);
-    if (recorder_) recorder_->RecordLidar(id_, frame);
-    NodeFrame out;
-    out.raw_bytes = frame.RawBytes();
+    const sensors::PointCloudFrame frame = lidar_.Capture(t_s, c_.weather, noise);
+    if (c_.recorder) c_.recorder->RecordLidar(c_.id, frame);
+    NodeFrame out{frame.RawBytes(), {}};
     out.content.points = preprocess_.Process(frame);
     return out;
   }
 
-  const std::string& id_;
-  const core::WeatherConfig& weather_;
-  Recorder* recorder_;
+  SensorContext c_;
   sensors::Lidar lidar_;
   pipeline::LidarPreprocessor preprocess_;
 };
 
+// The node's radar front end: IF cube, range-Doppler, CFAR, angles
+// (sensors/radar_processor.h), then the node's clustering.
 class RadarNodeSensor final : public NodeSensor {
  public:
-  RadarNodeSensor(const NodeConfig& node, const Scenario& s, WorldModel& world, Recorder* recorder)
-      : id_(node.id),
-        weather_(s.weather),
-        world_(world),
-        recorder_(recorder),
-        radar_(node.sensor.radar, world.scene()),
+  RadarNodeSensor(const NodeConfig& node, const Scenario& s, SensorContext c)
+      : c_(c),
+        radar_(node.sensor.radar, c.world.scene()),
         processor_(node.sensor.radar),
         preprocess_(node.sensor.radar, s.pipeline.preprocess) {}
 
  private:
-  // The node's radar front end: IF cube, range-Doppler, CFAR, angles
-  // (sensors/radar_processor.h), then the node's clustering.
   NodeFrame DoCapture(double t_s, core::RngStream& noise) override {
-    world_.scene().SetTime(t_s);
-    const sensors::RadarCube cube =
-        radar_.Synthesize(radar_.FindScatterers(t_s, world_.SmallObjects(t_s)), weather_, noise);
+    c_.world.scene().SetTime(t_s);
+    const sensors::RadarCube cube = radar_.Synthesize(
+        radar_.FindScatterers(t_s, c_.world.SmallObjects(t_s)), c_.weather, noise);
     const sensors::RadarFrame frame = processor_.Process(cube, radar_.X_WR(), t_s);
-    if (recorder_) recorder_->RecordRadar(id_, frame);
-    NodeFrame out;
-    out.raw_bytes = cube.RawBytes();
+    if (c_.recorder) c_.recorder->RecordRadar(c_.id, frame);
+    NodeFrame out{cube.RawBytes(), {}};
     out.content.points = preprocess_.Process(frame);
     return out;
   }
 
-  const std::string& id_;
-  const core::WeatherConfig& weather_;
-  WorldModel& world_;
-  Recorder* recorder_;
+  SensorContext c_;
   sensors::FmcwRadar radar_;
   sensors::RadarProcessor processor_;
   pipeline::RadarPreprocessor preprocess_;
@@ -133,15 +124,15 @@ NodeFrame NodeSensor::Capture(double t_s, core::RngStream& noise) {
 
 std::unique_ptr<NodeSensor> MakeNodeSensor(const NodeConfig& node, const Scenario& scenario,
                                            WorldModel& world, Recorder* recorder) {
-  const char* modality = node.sensor.modality();
-  Recorder* records = recorder && recorder->Wants(modality) ? recorder : nullptr;
+  const bool records = recorder && recorder->Wants(node.sensor.modality());
+  const SensorContext c{node.id, scenario.weather, world, records ? recorder : nullptr};
   switch (node.sensor.type) {
     case sensors::SensorType::kFisheyeStereo:
-      return std::make_unique<CameraNodeSensor>(node, scenario, world, records);
+      return std::make_unique<CameraNodeSensor>(node, scenario, c);
     case sensors::SensorType::kLidar:
-      return std::make_unique<LidarNodeSensor>(node, scenario, world, records);
+      return std::make_unique<LidarNodeSensor>(node, scenario, c);
     case sensors::SensorType::kFmcwRadar:
-      return std::make_unique<RadarNodeSensor>(node, scenario, world, records);
+      return std::make_unique<RadarNodeSensor>(node, scenario, c);
   }
   throw std::logic_error("unknown sensor type");
 }

@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "tests/test_support.h"
+#include "test_support.h"
 
 namespace {
 
