@@ -52,11 +52,12 @@ struct RaycastScene::Impl {
   std::vector<std::uint32_t> static_material;    // by geomID in static_scene
   std::vector<std::uint32_t> object_material;    // by object id (index 0 unused)
   std::vector<Eigen::Matrix3f> object_rotation;  // R_WO by object id, for normals
-  DeviceErrors errors;
+  // Shared by the views of one device: its error callback writes here.
+  std::shared_ptr<DeviceErrors> errors = std::make_shared<DeviceErrors>();
 
   void Check(const char* what) {
-    std::lock_guard<std::mutex> lock(errors.mutex);
-    if (!errors.first.empty()) throw std::runtime_error(std::string(what) + ": " + errors.first);
+    std::lock_guard<std::mutex> lock(errors->mutex);
+    if (!errors->first.empty()) throw std::runtime_error(std::string(what) + ": " + errors->first);
   }
 
   ~Impl() {
@@ -136,7 +137,7 @@ RaycastScene::RaycastScene(const core::WorldGeometry& world)
   if (!s.device)
     throw std::runtime_error("Embree: cannot create a device (error " +
                              std::to_string(static_cast<int>(rtcGetDeviceError(nullptr))) + ")");
-  rtcSetDeviceErrorFunction(s.device, OnEmbreeError, &s.errors);
+  rtcSetDeviceErrorFunction(s.device, OnEmbreeError, s.errors.get());
 
   s.static_scene = rtcNewScene(s.device);
   rtcSetSceneBuildQuality(s.static_scene, RTC_BUILD_QUALITY_HIGH);
@@ -168,6 +169,42 @@ RaycastScene::RaycastScene(const core::WorldGeometry& world)
 }
 
 RaycastScene::~RaycastScene() = default;
+
+RaycastScene::RaycastScene(const RaycastScene& other, ViewTag)
+    : impl_(std::make_unique<Impl>()),
+      materials_(other.materials_),
+      poses_(other.poses_),
+      static_triangles_(other.static_triangles_),
+      time_s_(other.time_s_) {
+  const Impl& o = *other.impl_;
+  Impl& s = *impl_;
+  // The BVHs of the city and of each moving object are shared (retained),
+  // the top level of instances is the view's own.
+  s.errors = o.errors;
+  s.device = o.device;
+  rtcRetainDevice(s.device);
+  s.static_scene = o.static_scene;
+  rtcRetainScene(s.static_scene);
+  s.static_material = o.static_material;
+  s.object_material = o.object_material;
+  s.object_rotation = o.object_rotation;
+  s.top = rtcNewScene(s.device);
+  rtcSetSceneFlags(s.top, RTC_SCENE_FLAG_DYNAMIC);
+  rtcSetSceneBuildQuality(s.top, RTC_BUILD_QUALITY_LOW);
+  s.AttachInstance(s.static_scene, kStaticInstanceId, Eigen::Isometry3d::Identity());
+  for (std::size_t k = 0; k < o.object_scenes.size(); ++k) {
+    RTCScene child = o.object_scenes[k];
+    rtcRetainScene(child);
+    s.object_scenes.push_back(child);
+    s.AttachInstance(child, static_cast<unsigned>(k + 1), poses_[k](time_s_));
+  }
+  rtcCommitScene(s.top);
+  s.Check("making a view of the scene");
+}
+
+std::unique_ptr<RaycastScene> RaycastScene::NewView() const {
+  return std::unique_ptr<RaycastScene>(new RaycastScene(*this, ViewTag{}));
+}
 
 int RaycastScene::AddMovingObject(const core::TriangleMesh& mesh, PoseFunction X_WO) {
   if (mesh.triangles.empty())

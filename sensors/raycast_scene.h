@@ -4,7 +4,10 @@
 // re-commits only the top level (no rebuild of the city).
 //
 // Thread safety: Intersect/Occluded may be called from many threads at once;
-// SetTime and AddMovingObject may not run concurrently with anything.
+// SetTime and AddMovingObject may not run concurrently with anything on the
+// same scene. Views (NewView) share the geometry but not the poses: a sensor
+// on another thread poses and casts into its own view while others use
+// theirs.
 // Errors reported by Embree are thrown as std::runtime_error.
 #pragma once
 
@@ -57,6 +60,14 @@ class RaycastScene {
   // Returns its id (1, 2, ...). Takes effect at the next SetTime.
   int AddMovingObject(const core::TriangleMesh& mesh, PoseFunction X_WO);
 
+  // A scene of the same geometry (the city's BVH and each moving object's,
+  // shared, not copied) with poses of its own: SetTime on a view moves
+  // nothing in the scene it was made from, nor the other way round. Rays
+  // cast into a view posed at t hit exactly what they hit in this scene
+  // posed at t. Make views after the last AddMovingObject (objects added
+  // later are not in them); a view may outlive this scene.
+  std::unique_ptr<RaycastScene> NewView() const;
+
   // Poses every moving object at t_s and commits the top-level BVH.
   void SetTime(double t_s);
   double time_s() const { return time_s_; }
@@ -79,6 +90,9 @@ class RaycastScene {
   std::size_t static_triangle_count() const { return static_triangles_; }
 
  private:
+  struct ViewTag {};
+  RaycastScene(const RaycastScene& other, ViewTag);
+
   struct Impl;
   std::unique_ptr<Impl> impl_;
   std::vector<core::Material> materials_;

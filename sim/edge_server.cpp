@@ -129,8 +129,11 @@ std::vector<std::string> EdgeServer::SteeredMethods() const {
 bool EdgeServer::OnArrival(const channel::Message& m, core::SimTime t_arrival) {
   if (!receiver_.OnArrival(m, t_arrival) || !m.content) return false;
   const auto& content = *static_cast<const NodeContent*>(m.content.get());
-  if (ekf_ && content.camera) ekf_->Observe(content.node_id, *content.camera);
-  if (ekf_ && content.points) ekf_->Observe(content.node_id, *content.points);
+  if (ekf_) {
+    const auto timing = core::WallProfile::Measure(profile_, "edge/ekf");
+    if (content.camera) ekf_->Observe(content.node_id, *content.camera);
+    if (content.points) ekf_->Observe(content.node_id, *content.points);
+  }
   if (uavloc_ && !content.latent.empty()) {
     const std::int64_t k = m.t_capture_ns / window_ns_ + 1;
     pipeline::WindowInputs& w = pending_[k];
@@ -154,17 +157,22 @@ std::map<std::string, Eigen::Vector3d> EdgeServer::EstimateWindow(std::int64_t t
     // deadline would otherwise linger).
     pending_.erase(pending_.begin(), pending_.upper_bound(k));
     for (auto& [method, ablation] : ablations_) {
+      const auto timing = core::WallProfile::Measure(profile_, "edge/" + method);
       pipeline::WindowInputs one;
       one.window = k;
       const int m = static_cast<int>(ablation.first);
       one.frames[m] = inputs.frames[m];
       if (const auto p = ablation.second->OnWindow(one)) estimated[method] = *p;
     }
-    if (Runs("uavloc"))
+    if (Runs("uavloc")) {
+      const auto timing = core::WallProfile::Measure(profile_, "edge/uavloc");
       if (const auto p = uavloc_->edge().OnWindow(inputs)) estimated["uavloc"] = *p;
+    }
   }
-  if (ekf_)
+  if (ekf_) {
+    const auto timing = core::WallProfile::Measure(profile_, "edge/ekf");
     if (const auto p = ekf_->EstimateAt(t_s)) estimated["ekf"] = *p;
+  }
   return estimated;
 }
 

@@ -30,6 +30,7 @@
 #include "pipeline/model_bundle.h"
 #include "pipeline/node/node_encoder.h"
 #include "sim/core/json_io.h"
+#include "sim/core/wall_profile.h"
 #include "sim/scenario.h"
 #include "sim/sensing_node.h"
 
@@ -70,6 +71,9 @@ class EdgeServer {
   // null without a model.
   const core::Json& model_info() const { return model_info_; }
 
+  // Times each method into `profile` ("edge/<method>"); null: no timing.
+  void set_profile(core::WallProfile* profile) { profile_ = profile; }
+
  private:
   bool Runs(const std::string& method) const;
 
@@ -83,6 +87,7 @@ class EdgeServer {
   std::map<std::string, std::pair<core::Modality, std::unique_ptr<pipeline::EdgeLocalizer>>>
       ablations_;
   std::map<std::int64_t, pipeline::WindowInputs> pending_;  // window k -> latents arrived
+  core::WallProfile* profile_ = nullptr;
 };
 
 }  // namespace uavsim::sim

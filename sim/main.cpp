@@ -113,7 +113,8 @@ const char* kTrainHelp =
     "usage: uavsim train SCENARIO.json [--out MODEL] [--config TRAIN.json]\n"
     "                    [--config-set /ptr=value]... [--quick] [--seed N] [--episodes N]\n"
     "                    [--episode-s S] [--bottleneck ib|mlp] [--head H] [--threads N]\n"
-    "                    [--data FILE] [--set /ptr=value]... [--force] [--quiet]\n"
+    "                    [--jobs N] [--data FILE] [--set /ptr=value]... [--force] [--quiet]\n"
+    "       mpirun -np K uavsim train SCENARIO.json ... (every rank simulates episodes)\n"
     "\n"
     "Generates training data by simulation and trains the UAVLoc model with LibTorch on\n"
     "the CPU. Each episode is the scenario with its own target trajectory (orbit,\n"
@@ -148,6 +149,9 @@ const char* kTrainHelp =
     "  --head H       anchored (default: the Mamba output picks among the nodes' geometric\n"
     "                 anchors; see NOTES.md) or paper (its linear head)\n"
     "  --threads N    LibTorch threads (default 1); results depend on it\n"
+    "  --jobs N       episodes simulated at a time, each in its own process with cores / N\n"
+    "                 threads (default 1; per rank under mpirun, where rank 0 hands out\n"
+    "                 episodes and trains); the episodes are the same whatever N\n"
     "  --data FILE    the simulated episodes: read FILE if it exists (no simulation),\n"
     "                 else simulate and write it (train again without simulating)\n"
     "  --set P=V      override the scenario's value at JSON pointer P\n"
@@ -244,6 +248,20 @@ int Validate(int argc, char** argv) {
   return kExitOk;
 }
 
+// Where the time went, on a terminal: the three largest parts of the
+// run's profile_s (metrics.json has them all).
+void PrintTopParts(const uavsim::sim::RunSummary& summary) {
+  std::vector<std::pair<std::string, double>> parts = summary.profile_s;
+  std::stable_sort(parts.begin(), parts.end(),
+                   [](const auto& a, const auto& b) { return a.second > b.second; });
+  if (parts.empty() || summary.wall_s <= 0.0) return;
+  std::printf("time:");
+  for (std::size_t i = 0; i < parts.size() && i < 3; ++i)
+    std::printf("%s %s %.1f s (%.0f %%)", i ? "," : "", parts[i].first.c_str(), parts[i].second,
+                100.0 * parts[i].second / summary.wall_s);
+  std::printf(" (profile_s in metrics.json)\n");
+}
+
 int Run(int argc, char** argv) {
   const ParsedArgs a =
       Parse("run", argc, argv, 2, {"--out", "--seed", "--duration", "--record", "--set"},
@@ -306,6 +324,7 @@ int Run(int argc, char** argv) {
         std::printf(" %s %.3f", method.c_str(), rmse);
       std::printf("\n");
     }
+    if (::isatty(STDOUT_FILENO)) PrintTopParts(summary);
   }
   return kExitOk;
 }
@@ -344,9 +363,9 @@ const std::map<std::string, std::string>& ReplacedTrainFlags() {
 }
 
 int Train(int argc, char** argv) {
-  std::set<std::string> value_options{"--out",     "--seed",   "--episodes",  "--episode-s",
-                                      "--threads", "--set",    "--data",      "--bottleneck",
-                                      "--head",    "--config", "--config-set"};
+  std::set<std::string> value_options{"--out",        "--seed", "--episodes", "--episode-s",
+                                      "--threads",    "--jobs", "--set",      "--data",
+                                      "--bottleneck", "--head", "--config",   "--config-set"};
   const auto refuse_replaced = [](const std::string& flag) {
     const auto it = ReplacedTrainFlags().find(flag);
     if (it == ReplacedTrainFlags().end()) return;
@@ -377,6 +396,8 @@ int Train(int argc, char** argv) {
     c.episodes = static_cast<int>(UnsignedOption("train", "--episodes", *v, 100000));
   if (auto v = a.Value("--threads"))
     c.threads = static_cast<int>(UnsignedOption("train", "--threads", *v, 256));
+  if (auto v = a.Value("--jobs"))
+    c.jobs = static_cast<int>(UnsignedOption("train", "--jobs", *v, 1024));
   if (auto v = a.Value("--episode-s"))
     c.episode_s = NumberOption("train", "--episode-s", *v, 1.0, 3600.0, "seconds from 1 to 3600");
   if (auto v = a.Value("--bottleneck")) {
@@ -389,10 +410,11 @@ int Train(int argc, char** argv) {
       throw UsageError("uavsim train: --head expects anchored or paper, got '" + *v + "'");
     c.paper_head = *v == "paper";
   }
-  if ((a.Value("--episodes") && c.episodes < 3) || (a.Value("--threads") && c.threads < 1))
+  if ((a.Value("--episodes") && c.episodes < 3) || (a.Value("--threads") && c.threads < 1) ||
+      c.jobs < 1)
     throw UsageError(
-        "uavsim train: --episodes needs at least 3 (training, validation, test) and --threads "
-        "at least 1");
+        "uavsim train: --episodes needs at least 3 (training, validation, test), --threads and "
+        "--jobs at least 1");
   const auto config_sets = a.values.find("--config-set");
   c.training = uavsim::sim::ResolveTrainingConfig(
       c.quick, a.Value("--config").value_or(""),
@@ -401,7 +423,9 @@ int Train(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) c.command_line += " " + std::string(argv[i]);
   const uavsim::sim::Scenario s = uavsim::sim::LoadScenario(file, Overrides(a));
   c.out_dir = a.Value("--out").value_or("models/" + s.name);
-  const uavsim::pipeline::TrainReport r = uavsim::sim::RunTraining(s, c);
+  const std::optional<uavsim::pipeline::TrainReport> report = uavsim::sim::RunTraining(s, c);
+  if (!report) return kExitOk;  // an MPI rank that only simulated episodes
+  const uavsim::pipeline::TrainReport& r = *report;
   if (!c.quiet) {
     for (const auto& st : r.stages)
       std::printf(

@@ -16,6 +16,7 @@
 #include "sim/core/rng.h"
 #include "sim/core/simulator.h"
 #include "sim/core/time.h"
+#include "sim/core/wall_profile.h"
 #include "sim/edge_server.h"
 #include "sim/recorder.h"
 #include "sim/run_writer.h"
@@ -94,7 +95,8 @@ std::vector<std::unique_ptr<SensingNode>> StartNodes(core::Simulator& sim, core:
                                                      const Scenario& s, WorldModel& world,
                                                      Recorder* recorder, EdgeServer& edge,
                                                      const Uplinks& links,
-                                                     TrainingCollector* collector) {
+                                                     TrainingCollector* collector,
+                                                     core::WallProfile* profile) {
   std::vector<std::unique_ptr<SensingNode>> nodes;
   for (std::size_t i = 0; i < s.nodes.size(); ++i) {
     const NodeConfig& config = s.nodes[i];
@@ -104,13 +106,14 @@ std::vector<std::unique_ptr<SensingNode>> StartNodes(core::Simulator& sim, core:
     wiring.receiver = &edge.receiver();
     wiring.encoder = edge.encoder(modality);
     wiring.message_bytes = edge.MessageBytes(modality);
+    wiring.profile = profile;
     if (collector)
       wiring.observer = [collector](const SensingNode& node, double t_s, NodeContent& content) {
         collector->OnFrame(node, t_s, content);
       };
-    nodes.push_back(std::make_unique<SensingNode>(config, static_cast<std::uint32_t>(i),
-                                                  MakeNodeSensor(config, s, world, recorder), s,
-                                                  std::move(wiring)));
+    nodes.push_back(std::make_unique<SensingNode>(
+        config, static_cast<std::uint32_t>(i), MakeNodeSensor(config, s, world, recorder, profile),
+        s, std::move(wiring)));
     nodes.back()->Start(sim, t_end);
   }
   return nodes;
@@ -132,11 +135,15 @@ std::map<std::string, NodeTraffic> TrafficByModality(
 }
 
 RunSummary Summarize(const Scenario& s, const std::map<std::string, NodeTraffic>& traffic,
-                     const WindowScorer* scores, std::size_t truth_rows, double wall_s) {
+                     const WindowScorer* scores, std::size_t truth_rows, double wall_s,
+                     const core::WallProfile& profile) {
   RunSummary summary;
   summary.sim_s = s.duration_s;
   summary.truth_rows = truth_rows;
   summary.wall_s = wall_s;
+  summary.profile_s = profile.parts();
+  // What no part measured: the event loop, the uplinks, the truth.
+  summary.profile_s.emplace_back("other", std::max(0.0, wall_s - profile.total_s()));
   for (const auto& [m, t] : traffic) summary.frames[m] = t.frames;
   for (const std::string& method : s.pipeline.methods) summary.rmse_m[method] = std::nullopt;
   if (!scores) return summary;
@@ -171,6 +178,10 @@ bool InterruptRequested() { return g_interrupt != 0; }
 // in place of the methods, the scoring and the writer.
 RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
   const auto wall_start = std::chrono::steady_clock::now();
+  const auto wall_since_start = [wall_start] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  };
+  core::WallProfile profile;
   const std::string started_utc = UtcNow();
   std::optional<results::RunDirectory> dir;
   std::optional<Recorder> recorder;
@@ -186,12 +197,13 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
   truth.Start(sim, t_end);
 
   EdgeServer edge(s, o.scenario_file, o.quiet, /*methods=*/!o.collect);
+  edge.set_profile(&profile);
   std::optional<TrainingCollector> collector;
   if (o.collect) collector.emplace(*o.collect, world, s.pipeline.window_s, t_end);
   TrainingCollector* const collecting = collector ? &*collector : nullptr;
   const Uplinks links = MakeUplinks(sim, s, edge, collecting);
-  const auto nodes =
-      StartNodes(sim, t_end, s, world, recorder ? &*recorder : nullptr, edge, links, collecting);
+  const auto nodes = StartNodes(sim, t_end, s, world, recorder ? &*recorder : nullptr, edge, links,
+                                collecting, &profile);
 
   // At every alignment window's deadline (its end plus the late allowance)
   // the edge estimates the target's position at the window's end from
@@ -206,7 +218,9 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
         const double t_s = core::ToSeconds(t_window_end);
         const Eigen::Vector3d truth_m = world.target().StateAt(t_s).position_m;
         if (collector) return collector->OnWindow(t_window_end, truth_m);
-        scores->Score(t_s, truth_m, edge.EstimateWindow(tick, t_s), world);
+        const auto estimated = edge.EstimateWindow(tick, t_s);
+        const auto timing = core::WallProfile::Measure(&profile, "beams");
+        scores->Score(t_s, truth_m, estimated, world);
       });
   window_timer.Start(sim, 0, t_end + 1);  // a deadline at exactly t_end still runs
 
@@ -219,19 +233,24 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
   });
   housekeeping.Start(sim, 0, t_end);
 
+  // Building the world's BVH, loading the model, the nodes' set-up.
+  profile.part("setup").seconds += wall_since_start();
   sim.RunUntil(t_end);
   if (interrupted || g_interrupt) throw Interrupted();
   progress.Finish();
 
-  const double wall_s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   const auto traffic = TrafficByModality(nodes);
-  const RunSummary summary =
-      Summarize(s, traffic, scores ? &*scores : nullptr, truth.table().rows(), wall_s);
-  if (o.collect) return summary;
-  recorder->Finish();
-  WriteRunDirectory(*dir, {s, o, summary, started_utc, truth.table(), *scores, edge, traffic});
-  return summary;
+  if (o.collect)
+    return Summarize(s, traffic, nullptr, truth.table().rows(), wall_since_start(), profile);
+  FinishedRun run{s, o, {}, started_utc, truth.table(), *scores, edge, traffic};
+  {
+    const auto timing = core::WallProfile::Measure(&profile, "write");
+    recorder->Finish();
+    WriteRunTables(*dir, run);
+  }
+  run.summary = Summarize(s, traffic, &*scores, truth.table().rows(), wall_since_start(), profile);
+  WriteRunMetrics(*dir, run);
+  return run.summary;
 }
 
 }  // namespace uavsim::sim

@@ -8,6 +8,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "pipeline/training/dataset.h"
@@ -31,7 +32,14 @@ struct RunOptions {
 
 struct RunSummary {
   double sim_s = 0.0;
-  double wall_s = 0.0;
+  double wall_s = 0.0;  // from the start to the run directory's tables written
+  // Wall seconds per part of the run, in the order first measured:
+  // "setup", "node/<id>/capture", ".../preprocess", ".../record",
+  // ".../encode", "edge/<method>", "beams", "write", and "other" (the rest of
+  // wall_s: the event loop, uplinks, truth, and waiting for frames). Nodes
+  // that capture on threads of their own overlap the rest, so the parts sum
+  // to wall_s or more.
+  std::vector<std::pair<std::string, double>> profile_s;
   std::size_t truth_rows = 0;
   std::map<std::string, std::uint64_t> frames;  // per modality
   // Per method that ran: RMSE over the windows it estimated, or nothing if

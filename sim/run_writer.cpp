@@ -57,6 +57,11 @@ core::Json Metrics(const FinishedRun& run) {
   metrics["sim_s"] = summary.sim_s;
   metrics["wall_s"] = summary.wall_s;
   metrics["realtime_factor"] = summary.wall_s > 0 ? summary.sim_s / summary.wall_s : 0.0;
+  // Where the wall time went (not deterministic, as wall_s); see
+  // RunSummary::profile_s.
+  core::Json profile = core::Json::object();
+  for (const auto& [part, seconds] : summary.profile_s) profile[part] = seconds;
+  metrics["profile_s"] = profile;
   return metrics;
 }
 
@@ -74,11 +79,14 @@ core::Json Manifest(const FinishedRun& run) {
 
 }  // namespace
 
-void WriteRunDirectory(results::RunDirectory& dir, const FinishedRun& run) {
+void WriteRunTables(results::RunDirectory& dir, const FinishedRun& run) {
   dir.WriteText("truth.csv", run.truth.str());
   dir.WriteText("estimates.csv", run.scores.estimates().str());
   dir.WriteText("rate_snr.csv", run.scores.downlink().rates().Csv());
   PlotRateSnr(dir, run);
+}
+
+void WriteRunMetrics(results::RunDirectory& dir, const FinishedRun& run) {
   dir.WriteJson("metrics.json", Metrics(run));
   dir.WriteJson("manifest.json", Manifest(run));
   dir.Commit();

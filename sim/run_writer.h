@@ -21,7 +21,7 @@ namespace uavsim::sim {
 struct FinishedRun {
   const Scenario& scenario;
   const RunOptions& options;
-  const RunSummary& summary;
+  RunSummary summary;  // filled in before WriteRunMetrics
   std::string started_utc;
   const results::CsvTable& truth;
   const WindowScorer& scores;
@@ -29,9 +29,12 @@ struct FinishedRun {
   std::map<std::string, NodeTraffic> traffic;  // per modality: camera, lidar, radar
 };
 
-// Writes every file of the run into `dir`'s staging folder and commits it.
-// Throws std::runtime_error for I/O; warns on stderr (unless quiet) when
-// gnuplot cannot draw rate_snr.png.
-void WriteRunDirectory(results::RunDirectory& dir, const FinishedRun& run);
+// Writes the run's tables into `dir`'s staging folder: truth.csv,
+// estimates.csv, rate_snr.csv and its plot (warns on stderr, unless quiet,
+// when gnuplot cannot draw rate_snr.png).
+void WriteRunTables(results::RunDirectory& dir, const FinishedRun& run);
+// Then metrics.json (with the summary's wall times) and manifest.json, and
+// commits the directory. Both throw std::runtime_error for I/O.
+void WriteRunMetrics(results::RunDirectory& dir, const FinishedRun& run);
 
 }  // namespace uavsim::sim

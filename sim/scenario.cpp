@@ -106,6 +106,13 @@ void Visit(V& v, OutputsConfig& c) {
 UAVSIM_INSTANTIATE_VISIT(OutputsConfig);
 
 template <class V>
+void Visit(V& v, ExecutionConfig& c) {
+  v("static_cache", c.static_cache);
+  v("parallel_nodes", c.parallel_nodes);
+}
+UAVSIM_INSTANTIATE_VISIT(ExecutionConfig);
+
+template <class V>
 void Visit(V& v, Scenario& c) {
   v("name", c.name);
   CheckId(v, "name", c.name);
@@ -120,6 +127,7 @@ void Visit(V& v, Scenario& c) {
   v.Object("base_station", c.base_station);
   v.Object("pipeline", c.pipeline);
   v.Object("outputs", c.outputs);
+  v.Object("execution", c.execution);
 }
 UAVSIM_INSTANTIATE_VISIT(Scenario);
 

@@ -49,6 +49,18 @@ struct OutputsConfig {
   double truth_rate_hz = 20.0;  // rows per simulated second in truth.csv
 };
 
+// How the run executes, never what it simulates: every setting gives the
+// same outputs, byte for byte (wall times aside). Off is for comparison
+// and for finding a fault.
+struct ExecutionConfig {
+  // Sensors render what is static (the city, from a sensor that never
+  // moves) once, and per frame only what moving objects can change.
+  bool static_cache = true;
+  // Each node makes its next frame on a thread of its own, ahead of its
+  // time, while the event loop runs.
+  bool parallel_nodes = true;
+};
+
 struct Scenario {
   std::string name = "default";
   std::uint64_t seed = 1;
@@ -62,6 +74,7 @@ struct Scenario {
   channel::BaseStationConfig base_station;
   pipeline::PipelineConfig pipeline;
   OutputsConfig outputs;
+  ExecutionConfig execution;
 
   // Not part of the file: the folder relative paths are resolved against.
   std::string base_dir = ".";
@@ -81,6 +94,8 @@ template <class V>
 void Visit(V& v, SnrGridConfig& c);
 template <class V>
 void Visit(V& v, OutputsConfig& c);
+template <class V>
+void Visit(V& v, ExecutionConfig& c);
 template <class V>
 void Visit(V& v, Scenario& c);
 

@@ -1,5 +1,6 @@
 #include "sim/sensing_node.h"
 
+#include <optional>
 #include <stdexcept>
 #include <utility>
 
@@ -17,31 +18,56 @@ namespace uavsim::sim {
 namespace {
 
 // What every node sensor needs besides its model: its node's id, the
-// weather, the world it poses, and where it records (null: nowhere).
+// weather, the world, its own view of the world's scene (so that nodes may
+// capture on threads of their own), where it records (null: nowhere) and
+// where it times its work (null: nowhere).
 struct SensorContext {
+  SensorContext(const std::string& id, const core::WeatherConfig& weather, WorldModel& world,
+                Recorder* recorder, core::WallProfile* profile)
+      : id(id),
+        weather(weather),
+        world(world),
+        scene(world.scene().NewView()),
+        recorder(recorder),
+        capture(profile ? &profile->part("node/" + id + "/capture") : nullptr),
+        preprocess(profile ? &profile->part("node/" + id + "/preprocess") : nullptr) {}
+
   const std::string& id;
   const core::WeatherConfig& weather;
   WorldModel& world;
+  std::unique_ptr<sensors::RaycastScene> scene;
   Recorder* recorder;
+  // Made here, on the event loop's thread: a capture ahead of time only adds
+  // to its own parts.
+  core::WallProfile::Part* capture;
+  core::WallProfile::Part* preprocess;
 };
 
 class CameraNodeSensor final : public NodeSensor {
  public:
   CameraNodeSensor(const NodeConfig& node, const Scenario& s, SensorContext c)
-      : c_(c),
-        camera_(node.sensor.fisheye, c.world.scene()),
+      : c_(std::move(c)),
+        camera_(node.sensor.fisheye, *c_.scene),
         preprocess_(node.sensor.fisheye, s.pipeline.preprocess) {
-    WorldModel& world = c.world;
+    WorldModel& world = c_.world;
     camera_.set_small_objects([&world](double t_s) { return world.SmallObjects(t_s); });
   }
 
  private:
   NodeFrame DoCapture(double t_s, core::RngStream& noise) override {
-    c_.world.scene().SetTime(t_s);
-    const sensors::StereoFrame frame = camera_.Capture(t_s, c_.weather, noise);
-    if (c_.recorder) c_.recorder->RecordCamera(c_.id, frame);
-    NodeFrame out{frame.RawBytes(), {}};
-    out.content.camera = preprocess_.Process(frame);
+    auto frame = std::make_shared<sensors::StereoFrame>();
+    {
+      const core::WallProfile::Scope timing(c_.capture);
+      c_.scene->SetTime(t_s);
+      *frame = camera_.Capture(t_s, c_.weather, noise);
+    }
+    const core::WallProfile::Scope timing(c_.preprocess);
+    NodeFrame out{frame->RawBytes(), {}, {}};
+    out.content.camera = preprocess_.Process(*frame);
+    if (c_.recorder)
+      out.record = [recorder = c_.recorder, &id = c_.id, frame] {
+        recorder->RecordCamera(id, *frame);
+      };
     return out;
   }
 
@@ -53,17 +79,25 @@ class CameraNodeSensor final : public NodeSensor {
 class LidarNodeSensor final : public NodeSensor {
  public:
   LidarNodeSensor(const NodeConfig& node, const Scenario& s, SensorContext c)
-      : c_(c),
-        lidar_(node.sensor.lidar, c.world.scene()),
+      : c_(std::move(c)),
+        lidar_(node.sensor.lidar, *c_.scene),
         preprocess_(node.sensor.lidar, s.pipeline.preprocess) {}
 
  private:
   // The LiDAR poses the scene at each point's own time.
   NodeFrame DoCapture(double t_s, core::RngStream& noise) override {
-    const sensors::PointCloudFrame frame = lidar_.Capture(t_s, c_.weather, noise);
-    if (c_.recorder) c_.recorder->RecordLidar(c_.id, frame);
-    NodeFrame out{frame.RawBytes(), {}};
-    out.content.points = preprocess_.Process(frame);
+    auto frame = std::make_shared<sensors::PointCloudFrame>();
+    {
+      const core::WallProfile::Scope timing(c_.capture);
+      *frame = lidar_.Capture(t_s, c_.weather, noise);
+    }
+    const core::WallProfile::Scope timing(c_.preprocess);
+    NodeFrame out{frame->RawBytes(), {}, {}};
+    out.content.points = preprocess_.Process(*frame);
+    if (c_.recorder)
+      out.record = [recorder = c_.recorder, &id = c_.id, frame] {
+        recorder->RecordLidar(id, *frame);
+      };
     return out;
   }
 
@@ -77,20 +111,32 @@ class LidarNodeSensor final : public NodeSensor {
 class RadarNodeSensor final : public NodeSensor {
  public:
   RadarNodeSensor(const NodeConfig& node, const Scenario& s, SensorContext c)
-      : c_(c),
-        radar_(node.sensor.radar, c.world.scene()),
+      : c_(std::move(c)),
+        radar_(node.sensor.radar, *c_.scene),
         processor_(node.sensor.radar),
         preprocess_(node.sensor.radar, s.pipeline.preprocess) {}
 
  private:
   NodeFrame DoCapture(double t_s, core::RngStream& noise) override {
-    c_.world.scene().SetTime(t_s);
-    const sensors::RadarCube cube = radar_.Synthesize(
-        radar_.FindScatterers(t_s, c_.world.SmallObjects(t_s)), c_.weather, noise);
-    const sensors::RadarFrame frame = processor_.Process(cube, radar_.X_WR(), t_s);
-    if (c_.recorder) c_.recorder->RecordRadar(c_.id, frame);
-    NodeFrame out{cube.RawBytes(), {}};
-    out.content.points = preprocess_.Process(frame);
+    std::uint64_t raw_bytes = 0;
+    auto frame = std::make_shared<sensors::RadarFrame>();
+    {
+      // The radar's capture is the IF cube and its signal processing (the
+      // radar's own DSP); the node's pre-processing is the clustering.
+      const core::WallProfile::Scope timing(c_.capture);
+      c_.scene->SetTime(t_s);
+      const sensors::RadarCube cube = radar_.Synthesize(
+          radar_.FindScatterers(t_s, c_.world.SmallObjects(t_s)), c_.weather, noise);
+      raw_bytes = cube.RawBytes();
+      *frame = processor_.Process(cube, radar_.X_WR(), t_s);
+    }
+    const core::WallProfile::Scope timing(c_.preprocess);
+    NodeFrame out{raw_bytes, {}, {}};
+    out.content.points = preprocess_.Process(*frame);
+    if (c_.recorder)
+      out.record = [recorder = c_.recorder, &id = c_.id, frame] {
+        recorder->RecordRadar(id, *frame);
+      };
     return out;
   }
 
@@ -123,16 +169,17 @@ NodeFrame NodeSensor::Capture(double t_s, core::RngStream& noise) {
 }
 
 std::unique_ptr<NodeSensor> MakeNodeSensor(const NodeConfig& node, const Scenario& scenario,
-                                           WorldModel& world, Recorder* recorder) {
+                                           WorldModel& world, Recorder* recorder,
+                                           core::WallProfile* profile) {
   const bool records = recorder && recorder->Wants(node.sensor.modality());
-  const SensorContext c{node.id, scenario.weather, world, records ? recorder : nullptr};
+  SensorContext c(node.id, scenario.weather, world, records ? recorder : nullptr, profile);
   switch (node.sensor.type) {
     case sensors::SensorType::kFisheyeStereo:
-      return std::make_unique<CameraNodeSensor>(node, scenario, c);
+      return std::make_unique<CameraNodeSensor>(node, scenario, std::move(c));
     case sensors::SensorType::kLidar:
-      return std::make_unique<LidarNodeSensor>(node, scenario, c);
+      return std::make_unique<LidarNodeSensor>(node, scenario, std::move(c));
     case sensors::SensorType::kFmcwRadar:
-      return std::make_unique<RadarNodeSensor>(node, scenario, c);
+      return std::make_unique<RadarNodeSensor>(node, scenario, std::move(c));
   }
   throw std::logic_error("unknown sensor type");
 }
@@ -149,21 +196,59 @@ SensingNode::SensingNode(const NodeConfig& config, std::uint32_t index,
       clock_(config.sensor.timing().rate_hz, config.sensor.timing().phase_s,
              config.sensor.timing().clock_jitter_s,
              core::RngStream(scenario.seed, "node/" + config.id + "/clock"),
-             [this](std::int64_t, core::SimTime t) { OnFrame(t); }) {}
+             [this](std::int64_t, core::SimTime t) { OnFrame(t); }),
+      ahead_of_time_(scenario.execution.parallel_nodes) {}
 
-void SensingNode::Start(core::Simulator& sim, core::SimTime t_end) { clock_.Start(sim, 0, t_end); }
+SensingNode::~SensingNode() {
+  // A frame in the making uses the sensor and the noise stream: wait for it.
+  if (next_.valid()) next_.wait();
+}
+
+void SensingNode::Start(core::Simulator& sim, core::SimTime t_end) {
+  clock_.Start(sim, 0, t_end);
+  CaptureNextAhead();
+}
+
+// The node's frames depend on nothing the event loop does (the world is a
+// function of time; the sensor, its pre-processing and the noise stream are
+// the node's own), so the next one may be made on a thread of its own while
+// the loop runs: the frames, and so the run, are the same either way.
+void SensingNode::CaptureNextAhead() {
+  if (!ahead_of_time_) return;
+  const std::optional<core::SimTime> t = clock_.next_delivery();
+  if (!t) return;
+  next_t_ = *t;
+  next_ = std::async(std::launch::async,
+                     [this, t_s = core::ToSeconds(*t)] { return sensor_->Capture(t_s, noise_); });
+}
+
+NodeFrame SensingNode::TakeFrame(core::SimTime t) {
+  if (!next_.valid()) return sensor_->Capture(core::ToSeconds(t), noise_);
+  if (next_t_ != t) throw std::logic_error("a node's frame made ahead is for another time");
+  NodeFrame frame = next_.get();
+  CaptureNextAhead();
+  return frame;
+}
 
 void SensingNode::OnFrame(core::SimTime t) {
   const double t_s = core::ToSeconds(t);
-  NodeFrame frame = sensor_->Capture(t_s, noise_);
+  NodeFrame frame = TakeFrame(t);
+  if (frame.record) {
+    const auto timing =
+        core::WallProfile::Measure(wiring_.profile, "node/" + config_.id + "/record");
+    frame.record();  // in capture order, on the event loop's thread
+  }
   auto content = std::make_shared<NodeContent>(std::move(frame.content));
   content->node_id = config_.id;
   // The node sends its latent when it found something, else a bare header
   // ("nothing seen").
   const bool found = content->FoundSomething();
-  if (found && wiring_.encoder)
+  if (found && wiring_.encoder) {
+    const auto timing =
+        core::WallProfile::Measure(wiring_.profile, "node/" + config_.id + "/encode");
     content->latent = content->camera ? wiring_.encoder->Encode(*content->camera)
                                       : wiring_.encoder->Encode(*content->points);
+  }
   if (found && wiring_.observer) wiring_.observer(*this, t_s, *content);
   // The latent travels, not the crops: the edge's filter needs the geometry only.
   if (content->camera) content->camera->crop_left.clear(), content->camera->crop_right.clear();

@@ -11,6 +11,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <future>
 #include <memory>
 #include <optional>
 #include <string>
@@ -24,6 +25,7 @@
 #include "sim/core/periodic_process.h"
 #include "sim/core/rng.h"
 #include "sim/core/simulator.h"
+#include "sim/core/wall_profile.h"
 #include "sim/scenario.h"
 
 namespace uavsim::sim {
@@ -48,13 +50,19 @@ struct NodeContent {
   std::uint64_t PreprocessedBytes() const;
 };
 
-// A sensor behind one interface: Capture poses the world at t_s, captures,
-// records the raw frame when the run records this modality, and
-// pre-processes it. The public method keeps the checks; each sensor's work
+// A sensor behind one interface: Capture poses its view of the world at t_s,
+// captures, pre-processes, and says how to record the raw frame when the
+// run records this modality. Capture touches only the sensor's own state
+// and the noise stream it is given: nodes may capture on threads of their
+// own. The public method keeps the checks; each sensor's work
 // is its private DoCapture (ns-3's CalcRxPower / DoCalcRxPower).
 struct NodeFrame {
   std::uint64_t raw_bytes = 0;  // the raw frame (or radar cube) as the sensor produced it
   NodeContent content;          // its pre-processed content
+  // Writes the raw frame to the run's recorder (empty: not recorded). The
+  // node calls it on the event loop's thread, in capture order, so frames
+  // are numbered as without threads.
+  std::function<void()> record;
 };
 
 class NodeSensor {
@@ -69,9 +77,13 @@ class NodeSensor {
 
 // The node's sensor for its configuration: the stereo fisheye camera, the
 // LiDAR or the FMCW radar with the node's pre-processing. `recorder` may be
-// null (nothing recorded); `world` outlives the sensor.
+// null (nothing recorded); `world` outlives the sensor. With a `profile`
+// the sensor times its capture ("node/<id>/capture") and pre-processing
+// ("node/<id>/preprocess") into it (parts made here, so that a capture on
+// another thread only adds to its own).
 std::unique_ptr<NodeSensor> MakeNodeSensor(const NodeConfig& node, const Scenario& scenario,
-                                           WorldModel& world, Recorder* recorder);
+                                           WorldModel& world, Recorder* recorder,
+                                           core::WallProfile* profile = nullptr);
 
 // Bytes per modality over a run: the data-rate table (paper Table II).
 struct NodeTraffic {
@@ -92,11 +104,18 @@ class SensingNode {
     const pipeline::NodeEncoder* encoder = nullptr;  // null: no latent (no model runs)
     std::uint32_t message_bytes = 0;  // a message that carries something (header included)
     FrameObserver observer;
+    core::WallProfile* profile = nullptr;  // times recording and encoding ("node/<id>/...")
   };
 
-  // `index`: the node's position in the scenario's node list.
+  // `index`: the node's position in the scenario's node list. With the
+  // scenario's execution.parallel_nodes, the node captures each frame on a
+  // thread of its own ahead of its time, while the event loop runs (the
+  // same frames, byte for byte).
   SensingNode(const NodeConfig& config, std::uint32_t index, std::unique_ptr<NodeSensor> sensor,
               const Scenario& scenario, Wiring wiring);
+  ~SensingNode();
+  SensingNode(const SensingNode&) = delete;
+  SensingNode& operator=(const SensingNode&) = delete;
 
   // Starts the frame clock: frames at the sensor's rate, phase and clock
   // jitter over [0, t_end].
@@ -109,6 +128,8 @@ class SensingNode {
 
  private:
   void OnFrame(core::SimTime t);
+  NodeFrame TakeFrame(core::SimTime t);
+  void CaptureNextAhead();
 
   const NodeConfig& config_;
   std::uint32_t index_;
@@ -119,6 +140,9 @@ class SensingNode {
   std::uint64_t sequence_ = 0;
   NodeTraffic traffic_;
   core::PeriodicProcess clock_;
+  bool ahead_of_time_;
+  std::future<NodeFrame> next_;  // the next frame, in the making
+  core::SimTime next_t_ = 0;     // its time
 };
 
 }  // namespace uavsim::sim

@@ -1,18 +1,11 @@
 #include "sim/sweep.h"
 
-#include <sched.h>
 #include <signal.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
-#include <tbb/global_control.h>
 #include <boost/mpi/communicator.hpp>
 #include <boost/mpi/environment.hpp>
-#include <boost/serialization/string.hpp>
-#include <boost/serialization/utility.hpp>
-#include <boost/serialization/vector.hpp>
 #include <cerrno>
-#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <deque>
@@ -24,11 +17,11 @@
 #include <optional>
 #include <set>
 #include <sstream>
-#include <thread>
 
 #include "results/run_directory.h"
 #include "sim/core/error.h"
 #include "sim/core/progress.h"
+#include "sim/process_farm.h"
 #include "sim/run.h"
 
 namespace uavsim::sim {
@@ -174,90 +167,6 @@ void RemoveStalePartials(const std::string& dir, const std::set<std::string>& ou
   }
 }
 
-// Cores this process may run on.
-int CoresAvailable() {
-  cpu_set_t set;
-  if (sched_getaffinity(0, sizeof set, &set) == 0) return std::max(1, CPU_COUNT(&set));
-  return std::max(1u, std::thread::hardware_concurrency());
-}
-
-// How many ranks of this job share this host.
-int LocalRanks() {
-  for (const char* v : {"OMPI_COMM_WORLD_LOCAL_SIZE", "MPI_LOCALNRANKS", "PMI_LOCAL_SIZE"})
-    if (const char* s = std::getenv(v)) return std::max(1, std::atoi(s));
-  return 1;
-}
-
-// ---------------------------------------------------------------------------
-// A point runs in a child process (fork, no exec): the child has the point's
-// scenario already checked in memory, runs it with `threads` cores for
-// Embree's TBB pool (LibTorch runs on one thread in every run), and exits.
-
-pid_t LaunchPoint(const SweepPointSpec& point, const std::string& run_dir, int threads,
-                  const std::string& spec_file) {
-  std::fflush(nullptr);
-  const pid_t pid = ::fork();
-  if (pid < 0)
-    throw std::runtime_error(std::string("cannot start a point: fork: ") + std::strerror(errno));
-  if (pid > 0) return pid;
-  int rc = 0;
-  try {
-    tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
-                              static_cast<std::size_t>(threads));
-    RunOptions o;
-    o.out_dir = run_dir;
-    o.quiet = true;
-    o.scenario_file = spec_file + "#" + point.id;
-    RunScenario(point.scenario, o);
-  } catch (const Interrupted&) {
-    rc = 130;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "uavsim sweep: point %s: %s\n", point.id.c_str(), e.what());
-    rc = 1;
-  }
-  std::fflush(nullptr);
-  ::_exit(rc);
-}
-
-// Children of this process, point index by pid.
-class ChildPool {
- public:
-  explicit ChildPool(int slots) : slots_(slots) {}
-  ~ChildPool() { KillAll(); }
-  bool HasSlot() const { return static_cast<int>(running_.size()) < slots_; }
-  bool empty() const { return running_.empty(); }
-  void Add(pid_t pid, std::size_t point) { running_[pid] = point; }
-  // A finished child: (point, exit code), without blocking.
-  std::optional<std::pair<std::size_t, int>> Reap() {
-    for (auto it = running_.begin(); it != running_.end(); ++it) {
-      int status = 0;
-      const pid_t r = ::waitpid(it->first, &status, WNOHANG);
-      if (r == 0) continue;
-      const std::size_t point = it->second;
-      running_.erase(it);
-      const int rc = r < 0 ? 1 : WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-      return std::make_pair(point, rc);
-    }
-    return std::nullopt;
-  }
-  // Asks every child to stop (they discard their staging folders) and waits.
-  void KillAll() {
-    for (const auto& [pid, point] : running_) ::kill(pid, SIGTERM);
-    for (const auto& [pid, point] : running_) {
-      int status = 0;
-      while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-      }
-    }
-    running_.clear();
-  }
-
- private:
-  int slots_;
-  std::map<pid_t, std::size_t> running_;
-};
-
-void Nap() { std::this_thread::sleep_for(std::chrono::milliseconds(10)); }
-
 // Points this invocation should run: its shard, not yet done.
 std::deque<std::size_t> PointsToRun(const SweepSpec& spec, const SweepOptions& o,
                                     SweepOutcome& out) {
@@ -282,203 +191,34 @@ std::set<std::string> ShardIds(const SweepSpec& spec, const SweepOptions& o) {
   return ids;
 }
 
-int ThreadsPerPoint(int jobs) { return std::max(1, CoresAvailable() / (LocalRanks() * jobs)); }
-
-// Starts points from the front of `queue` while `pool` has free slots, each
-// into DIR/points/<id>. Returns whether it started any.
-bool FillSlots(ChildPool& pool, std::deque<std::size_t>& queue, const SweepSpec& spec,
-               const std::string& dir, int threads) {
-  bool started = false;
-  while (pool.HasSlot() && !queue.empty()) {
-    const std::size_t i = queue.front();
-    queue.pop_front();
-    pool.Add(LaunchPoint(spec.points[i], PointDir(dir, spec.points[i].id), threads, spec.file), i);
-    started = true;
-  }
-  return started;
-}
-
-// ---------------------------------------------------------------------------
-// Local execution.
-
-void RunLocal(const SweepSpec& spec, const SweepOptions& o, std::deque<std::size_t> queue,
-              SweepOutcome& out) {
-  core::Progress progress("sweep " + spec.name, static_cast<double>(queue.size()), "points",
-                          o.quiet);
-  const int threads = ThreadsPerPoint(o.jobs);
-  ChildPool pool(o.jobs);
-  std::size_t finished = 0;
-  while (!queue.empty() || !pool.empty()) {
-    if (InterruptRequested()) {
-      pool.KillAll();
-      throw Interrupted();
-    }
-    bool busy = false;
-    busy = FillSlots(pool, queue, spec, o.out_dir, threads) || busy;
-    while (const auto done = pool.Reap()) {
-      busy = true;
-      if (done->second == 130 || InterruptRequested()) {
-        pool.KillAll();
-        throw Interrupted();
-      }
-      ++finished;
-      done->second == 0 ? ++out.ran : ++out.failed;
-      progress.Update(static_cast<double>(finished));
-    }
-    if (!busy) Nap();
-  }
-  progress.Finish();
-}
-
-// ---------------------------------------------------------------------------
-// Distributed execution (Boost.MPI). Messages:
-//   worker -> 0  kRequest  (nothing)        a free slot
-//   0 -> worker  kAssign   point index, or -1: no more points
-//   worker -> 0  kResult   PointFiles       a point's outcome and files
-
-enum Tag { kRequest = 1, kAssign = 2, kResult = 3 };
-
-struct PointFiles {
-  long long point = -1;
-  int rc = 0;
-  std::vector<std::pair<std::string, std::string>> files;  // relative path -> bytes
-
-  template <class Archive>
-  void serialize(Archive& ar, unsigned) {
-    ar& point& rc& files;
-  }
-};
-
-std::vector<std::pair<std::string, std::string>> ReadTree(const fs::path& root) {
-  std::vector<std::pair<std::string, std::string>> files;
-  for (const auto& e : fs::recursive_directory_iterator(root))
-    if (e.is_regular_file())
-      files.emplace_back(fs::relative(e.path(), root).string(), ReadText(e.path()));
-  std::sort(files.begin(), files.end());
-  return files;
-}
-
 // Rank 0 writes a worker's point all-or-nothing, as a run would.
-void CommitPoint(const std::string& dir, const std::string& id,
-                 const std::vector<std::pair<std::string, std::string>>& files) {
+void CommitPoint(const std::string& dir, const std::string& id, const TaskFiles& files) {
   results::RunDirectory run(PointDir(dir, id), false);
   for (const auto& [path, bytes] : files) run.WriteText(path, bytes);
   run.Commit();
 }
 
-void RunCoordinator(boost::mpi::communicator& world, const SweepSpec& spec, const SweepOptions& o,
-                    std::deque<std::size_t> queue, SweepOutcome& out) {
-  core::Progress progress("sweep " + spec.name + " (" + std::to_string(world.size()) + " ranks)",
-                          static_cast<double>(queue.size()), "points", o.quiet);
-  const int threads = ThreadsPerPoint(o.jobs);
-  ChildPool pool(o.jobs);
-  int workers = world.size() - 1;  // not yet told to stop
-  std::size_t remote = 0, finished = 0;
-  const auto count = [&](int rc) {
-    ++finished;
-    rc == 0 ? ++out.ran : ++out.failed;
-    progress.Update(static_cast<double>(finished));
+// Each point is a whole run directory: DIR/points/<id> when rank 0 runs it.
+ProcessFarm PointFarm(const SweepSpec& spec, const std::string& dir) {
+  ProcessFarm farm;
+  farm.command = "uavsim sweep";
+  farm.unit = "points";
+  farm.run = [&spec](std::size_t i, const std::string& run_dir) {
+    RunOptions o;
+    o.out_dir = run_dir;
+    o.quiet = true;
+    o.scenario_file = spec.file + "#" + spec.points[i].id;
+    RunScenario(spec.points[i].scenario, o);
   };
-  while (!queue.empty() || !pool.empty() || workers > 0 || remote > 0) {
-    if (InterruptRequested()) {
-      pool.KillAll();
-      throw Interrupted();
-    }
-    bool busy = false;
-    while (auto st = world.iprobe(boost::mpi::any_source, kRequest)) {
-      world.recv(st->source(), kRequest);
-      long long assign = -1;
-      if (!queue.empty()) {
-        assign = static_cast<long long>(queue.front());
-        queue.pop_front();
-        ++remote;
-      } else {
-        --workers;
-      }
-      world.send(st->source(), kAssign, assign);
-      busy = true;
-    }
-    while (auto st = world.iprobe(boost::mpi::any_source, kResult)) {
-      PointFiles r;
-      world.recv(st->source(), kResult, r);
-      --remote;
-      const std::string& id = spec.points.at(static_cast<std::size_t>(r.point)).id;
-      if (r.rc == 0) CommitPoint(o.out_dir, id, r.files);
-      count(r.rc);
-      busy = true;
-    }
-    // Rank 0's own slots; a point is handed to a worker first when both wait.
-    busy = FillSlots(pool, queue, spec, o.out_dir, threads) || busy;
-    while (const auto done = pool.Reap()) {
-      count(done->second);
-      busy = true;
-    }
-    if (!busy) Nap();
-  }
-  progress.Finish();
-}
-
-void RunWorker(boost::mpi::communicator& world, const SweepSpec& spec, const SweepOptions& o,
-               SweepOutcome& out) {
-  char tmpl[] = "/tmp/uavsim-sweep-rank-XXXXXX";
-  if (!::mkdtemp(tmpl)) throw std::runtime_error("cannot create a temporary folder in /tmp");
-  const fs::path scratch(tmpl);
-  struct Cleanup {
-    fs::path p;
-    ~Cleanup() {
-      std::error_code ec;
-      fs::remove_all(p, ec);
-    }
-  } cleanup{scratch};
-  const int threads = ThreadsPerPoint(o.jobs);
-  ChildPool pool(o.jobs);
-  bool asked = false, stopped = false;
-  while (!stopped || !pool.empty()) {
-    if (InterruptRequested()) {
-      pool.KillAll();
-      throw Interrupted();
-    }
-    bool busy = false;
-    if (!stopped && !asked && pool.HasSlot()) {
-      world.send(0, kRequest);
-      asked = true;
-    }
-    if (asked && world.iprobe(0, kAssign)) {
-      long long i = -1;
-      world.recv(0, kAssign, i);
-      asked = false;
-      busy = true;
-      if (i < 0) {
-        stopped = true;
-      } else {
-        const SweepPointSpec& p = spec.points.at(static_cast<std::size_t>(i));
-        pool.Add(LaunchPoint(p, (scratch / p.id).string(), threads, spec.file),
-                 static_cast<std::size_t>(i));
-      }
-    }
-    while (const auto done = pool.Reap()) {
-      PointFiles r;
-      r.point = static_cast<long long>(done->first);
-      r.rc = done->second;
-      const fs::path run = scratch / spec.points[done->first].id;
-      if (r.rc == 0) r.files = ReadTree(run);
-      std::error_code ec;
-      fs::remove_all(run, ec);
-      world.send(0, kResult, r);
-      r.rc == 0 ? ++out.ran : ++out.failed;
-      busy = true;
-    }
-    if (!busy) Nap();
-  }
+  farm.describe = [&spec](std::size_t i) { return "point " + spec.points[i].id; };
+  farm.local_dir = [&spec, dir](std::size_t i) { return PointDir(dir, spec.points[i].id); };
+  farm.commit_remote = [&spec, dir](std::size_t i, const TaskFiles& files) {
+    CommitPoint(dir, spec.points[i].id, files);
+  };
+  return farm;
 }
 
 }  // namespace
-
-bool UnderMpirun() {
-  for (const char* v : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_RANK"})
-    if (std::getenv(v)) return true;
-  return false;
-}
 
 SweepOutcome MergeSweep(const std::string& dir) {
   const fs::path file = fs::path(dir) / "sweep.json";
@@ -536,11 +276,20 @@ SweepOutcome RunSweep(const SweepSpec& spec, const SweepOptions& o) {
     out.ranks = world->size();
   }
   const bool coordinator = !world || world->rank() == 0;
+  const ProcessFarm farm = PointFarm(spec, o.out_dir);
+  FarmOptions fo;
+  fo.jobs = o.jobs;
+  fo.quiet = o.quiet;
+  fo.label = "sweep " + spec.name;
+  const auto add = [&out](const FarmCounts& c) {
+    out.ran += c.ran;
+    out.failed += c.failed;
+  };
   try {
     if (!coordinator) {
       out.mpi_worker = true;
       world->barrier();  // rank 0 has prepared DIR
-      RunWorker(*world, spec, o, out);
+      add(RunFarmWorker(*world, farm, fo));
       return out;
     }
     std::deque<std::size_t> queue;
@@ -561,12 +310,12 @@ SweepOutcome RunSweep(const SweepSpec& spec, const SweepOptions& o) {
         world->abort(2);
       }
       world->barrier();
-      RunCoordinator(*world, spec, o, std::move(queue), out);
+      add(RunFarmCoordinator(*world, farm, std::move(queue), fo));
     } else {
       PrepareDir(o.out_dir, record);
       RemoveStalePartials(o.out_dir, ShardIds(spec, o));
       queue = PointsToRun(spec, o, out);
-      RunLocal(spec, o, std::move(queue), out);
+      add(RunFarmLocal(farm, std::move(queue), fo));
     }
   } catch (const Interrupted&) {
     // Finished points are committed; under MPI the other ranks stop too.

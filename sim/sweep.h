@@ -24,6 +24,7 @@
 #include <string>
 #include <vector>
 
+#include "sim/process_farm.h"  // UnderMpirun
 #include "sim/sweep_spec.h"
 
 namespace uavsim::sim {
@@ -56,8 +57,5 @@ SweepOutcome RunSweep(const SweepSpec& spec, const SweepOptions& options);
 // Writes the tables and plots of DIR from its finished points. Throws
 // core::UsageError if DIR is not a sweep or points are missing.
 SweepOutcome MergeSweep(const std::string& dir);
-
-// Whether this process was started by mpirun/mpiexec (OpenMPI, PMI, PMIx).
-bool UnderMpirun();
 
 }  // namespace uavsim::sim

@@ -1,9 +1,14 @@
 #include "sim/train.h"
 
 #include <algorithm>
+#include <boost/mpi/collectives.hpp>
+#include <boost/mpi/communicator.hpp>
+#include <boost/mpi/environment.hpp>
 #include <cmath>
+#include <deque>
 #include <filesystem>
 #include <iostream>
+#include <memory>
 
 #include "pipeline/model_bundle.h"
 #include "pipeline/torch_runtime.h"
@@ -12,10 +17,13 @@
 #include "sim/core/progress.h"
 #include "sim/core/rng.h"
 #include "sim/core/trajectory.h"
+#include "sim/process_farm.h"
 #include "sim/run.h"
 
 namespace uavsim::sim {
 namespace {
+
+namespace fs = std::filesystem;
 
 // Where the scenario's own target flies: the box its trajectory covers over
 // the scenario's duration (sampled every 0.25 s, up to 10 minutes).
@@ -140,19 +148,94 @@ pipeline::Episode SimulateEpisode(const Scenario& s) {
   return episode;
 }
 
+namespace {
+
+// Episode i of the plan, simulated and labelled.
+pipeline::Episode SimulatePlannedEpisode(const Scenario& base, const EpisodePlan& plan, int i) {
+  std::string label;
+  const Scenario s = EpisodeScenario(base, plan, plan.first_episode + i, &label);
+  pipeline::Episode e = SimulateEpisode(s);
+  e.label = label;
+  return e;
+}
+
+// Each episode in a child process of its own (sim/process_farm.h), written
+// to <folder>/episode.bin; rank 0 reads them back in episode order, so the
+// episodes are the same whatever the jobs or ranks.
+ProcessFarm EpisodeFarm(const Scenario& base, const EpisodePlan& plan, const fs::path& scratch) {
+  ProcessFarm farm;
+  farm.command = "uavsim train";
+  farm.unit = "episodes";
+  farm.run = [&base, &plan](std::size_t i, const std::string& dir) {
+    fs::create_directories(dir);
+    pipeline::WriteEpisodes({SimulatePlannedEpisode(base, plan, static_cast<int>(i))},
+                            (fs::path(dir) / "episode.bin").string());
+  };
+  farm.describe = [&plan](std::size_t i) {
+    return "episode " + std::to_string(plan.first_episode + static_cast<int>(i));
+  };
+  farm.local_dir = [scratch](std::size_t i) { return (scratch / std::to_string(i)).string(); };
+  farm.commit_remote = [scratch](std::size_t i, const TaskFiles& files) {
+    const fs::path dir = scratch / std::to_string(i);
+    fs::create_directories(dir);
+    for (const auto& [path, bytes] : files) results::WriteFileAtomic((dir / path).string(), bytes);
+  };
+  return farm;
+}
+
+// Reads the farm's episodes back in order; throws if one failed.
+std::vector<pipeline::Episode> CollectEpisodes(const fs::path& scratch, int count,
+                                               const FarmCounts& counts) {
+  if (counts.failed > 0)
+    throw std::runtime_error("uavsim train: " + std::to_string(counts.failed) + " of " +
+                             std::to_string(count) +
+                             " training episodes failed (their errors are above)");
+  std::vector<pipeline::Episode> episodes;
+  for (int i = 0; i < count; ++i) {
+    std::vector<pipeline::Episode> one =
+        pipeline::ReadEpisodes((scratch / std::to_string(i) / "episode.bin").string());
+    if (one.size() != 1)
+      throw std::runtime_error("uavsim train: episode " + std::to_string(i) + " file is damaged");
+    episodes.push_back(std::move(one.front()));
+  }
+  return episodes;
+}
+
+}  // namespace
+
 std::vector<pipeline::Episode> SimulateEpisodes(const Scenario& base, const EpisodePlan& plan,
                                                 bool quiet) {
   std::vector<pipeline::Episode> episodes;
   core::Progress progress("simulate training episodes", plan.episodes, "episodes", quiet);
   for (int i = 0; i < plan.episodes; ++i) {
-    std::string label;
-    const Scenario s = EpisodeScenario(base, plan, plan.first_episode + i, &label);
-    pipeline::Episode e = SimulateEpisode(s);
-    e.label = label;
-    episodes.push_back(std::move(e));
+    episodes.push_back(SimulatePlannedEpisode(base, plan, i));
     progress.Update(i + 1);
   }
   progress.Finish();
+  return episodes;
+}
+
+std::vector<pipeline::Episode> SimulateEpisodes(const Scenario& base, const EpisodePlan& plan,
+                                                const EpisodeJobs& jobs) {
+  const bool mpi = jobs.world != nullptr;
+  if (jobs.jobs <= 1 && !mpi) return SimulateEpisodes(base, plan, jobs.quiet);
+  const ProcessFarm farm = EpisodeFarm(base, plan, jobs.scratch_dir);
+  FarmOptions fo;
+  fo.jobs = jobs.jobs;
+  fo.quiet = jobs.quiet;
+  fo.label = "simulate training episodes";
+  if (mpi && jobs.world->rank() != 0) {
+    RunFarmWorker(*jobs.world, farm, fo);
+    return {};
+  }
+  std::deque<std::size_t> queue;
+  for (int i = 0; i < plan.episodes; ++i) queue.push_back(static_cast<std::size_t>(i));
+  const FarmCounts counts = mpi ? RunFarmCoordinator(*jobs.world, farm, std::move(queue), fo)
+                                : RunFarmLocal(farm, std::move(queue), fo);
+  std::vector<pipeline::Episode> episodes =
+      CollectEpisodes(jobs.scratch_dir, plan.episodes, counts);
+  std::error_code ec;
+  fs::remove_all(jobs.scratch_dir, ec);
   return episodes;
 }
 
@@ -207,7 +290,7 @@ pipeline::TrainingConfig ResolveTrainingConfig(bool quick, const std::string& co
   return pipeline::TrainingConfigFromJson(doc, name, Defaults(quick).training);
 }
 
-pipeline::TrainReport RunTraining(const Scenario& base, const TrainCommand& c) {
+std::optional<pipeline::TrainReport> RunTraining(const Scenario& base, const TrainCommand& c) {
   EpisodePlan plan = Defaults(c.quick).plan;
   plan.seed = c.seed;
   pipeline::TrainOptions t;
@@ -222,17 +305,48 @@ pipeline::TrainReport RunTraining(const Scenario& base, const TrainCommand& c) {
   if (c.episodes > 0) plan.episodes = c.episodes;
   if (c.episode_s > 0) plan.episode_s = c.episode_s;
 
-  results::RunDirectory dir(c.out_dir, c.force);  // the model folder, all-or-nothing
+  // Under mpirun every rank simulates episodes; rank 0 alone writes and
+  // trains, and says whether there is anything to simulate (--data may
+  // hold the episodes already).
+  std::unique_ptr<boost::mpi::environment> env;
+  std::unique_ptr<boost::mpi::communicator> world;
+  if (UnderMpirun()) {
+    env = std::make_unique<boost::mpi::environment>();
+    world = std::make_unique<boost::mpi::communicator>();
+  }
+  EpisodeJobs jobs{c.jobs, c.quiet, "", world.get()};
+  if (world && world->rank() != 0) {
+    int simulate = 0;
+    boost::mpi::broadcast(*world, simulate, 0);
+    if (simulate) SimulateEpisodes(base, plan, jobs);
+    return std::nullopt;
+  }
+
+  std::optional<results::RunDirectory> dir;
+  bool simulate = true;
+  try {
+    dir.emplace(c.out_dir, c.force);  // the model folder, all-or-nothing
+    std::error_code ec;
+    simulate = c.data_file.empty() || !fs::is_regular_file(c.data_file, ec);
+  } catch (const std::exception& e) {
+    if (!world) throw;
+    std::cerr << e.what() << "\n";
+    world->abort(2);
+  }
+  if (world) {
+    int flag = simulate ? 1 : 0;
+    boost::mpi::broadcast(*world, flag, 0);
+  }
   pipeline::InitTorch(c.threads, c.seed);
   std::vector<pipeline::Episode> episodes;
-  std::error_code ec;
-  if (!c.data_file.empty() && std::filesystem::is_regular_file(c.data_file, ec)) {
+  if (!simulate) {
     episodes = pipeline::ReadEpisodes(c.data_file);
     plan.episodes = static_cast<int>(episodes.size());
     if (!episodes.empty() && !episodes.front().window_truth.empty())
       plan.episode_s = episodes.front().window_s * episodes.front().window_truth.size();
   } else {
-    episodes = SimulateEpisodes(base, plan, c.quiet);
+    jobs.scratch_dir = dir->StagingPath("episodes.partial");
+    episodes = SimulateEpisodes(base, plan, jobs);
     if (!c.data_file.empty()) pipeline::WriteEpisodes(episodes, c.data_file);
   }
   pipeline::Dataset data = SplitByTrajectory(std::move(episodes), c.seed);
@@ -247,8 +361,8 @@ pipeline::TrainReport RunTraining(const Scenario& base, const TrainCommand& c) {
                   "/" + std::to_string(data.test.size()) + " by trajectory)";
   pipeline::InitTorch(c.threads, c.seed);  // reseed: the weights do not depend on the simulation
   const pipeline::TrainReport report =
-      pipeline::TrainUavLoc(data, t, manifest, dir.StagingPath("."));
-  dir.Commit();
+      pipeline::TrainUavLoc(data, t, manifest, dir->StagingPath("."));
+  dir->Commit();
   return report;
 }
 

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -14,6 +15,10 @@
 #include "pipeline/training/trainer.h"
 #include "pipeline/training/training_config.h"
 #include "sim/scenario.h"
+
+namespace boost::mpi {
+class communicator;
+}
 
 namespace uavsim::sim {
 
@@ -34,9 +39,24 @@ Scenario EpisodeScenario(const Scenario& base, const EpisodePlan& plan, int i,
 // Simulates one episode and collects its samples (no files written).
 pipeline::Episode SimulateEpisode(const Scenario& s);
 
-// Episodes first_episode .. first_episode + episodes - 1, in order.
+// Episodes first_episode .. first_episode + episodes - 1, in order, in this
+// process.
 std::vector<pipeline::Episode> SimulateEpisodes(const Scenario& base, const EpisodePlan& plan,
                                                 bool quiet);
+
+// Where the episodes are simulated: `jobs` child processes at a time, and
+// under mpirun on every rank (sim/process_farm.h).
+struct EpisodeJobs {
+  int jobs = 1;
+  bool quiet = false;
+  std::string scratch_dir;                    // rank 0: where the children write (removed after)
+  boost::mpi::communicator* world = nullptr;  // under mpirun, else null
+};
+// The same episodes, byte for byte, whatever `jobs` and the ranks. At rank
+// 0 (or without MPI) returns them; other ranks return nothing once rank 0
+// has all. Throws std::runtime_error if an episode failed.
+std::vector<pipeline::Episode> SimulateEpisodes(const Scenario& base, const EpisodePlan& plan,
+                                                const EpisodeJobs& jobs);
 
 // Splits by trajectory: 15 % test and 15 % validation (at least one each when
 // there are three or more episodes), the rest training; which episode goes
@@ -72,6 +92,7 @@ struct TrainCommand {
   bool paper_head = false;            // the paper's linear edge head instead of the anchored one
   pipeline::TrainingConfig training;  // as ResolveTrainingConfig gives it
   int threads = 1;                    // LibTorch intra-op threads (see NOTES.md: 1 is fastest here)
+  int jobs = 1;                       // episodes simulated at a time (per rank under mpirun)
   // Episode file: read if it exists (no simulation), else written after
   // simulating. Empty: simulate, keep nothing.
   std::string data_file;
@@ -79,7 +100,8 @@ struct TrainCommand {
 };
 
 // Runs the whole command: simulate, train, write the model folder
-// atomically. Returns the report.
-pipeline::TrainReport RunTraining(const Scenario& base, const TrainCommand& c);
+// atomically. Returns the report; under mpirun, ranks other than 0 only
+// simulate episodes and return nothing.
+std::optional<pipeline::TrainReport> RunTraining(const Scenario& base, const TrainCommand& c);
 
 }  // namespace uavsim::sim

@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -42,21 +43,21 @@ TempRoot& Root() {
 }
 }  // namespace
 
-CliResult RunCli(const std::vector<std::string>& args, const std::string& cwd) {
+CliResult RunProgram(const std::vector<std::string>& args, const std::string& cwd) {
   FILE* out = tmpfile();
   FILE* err = tmpfile();
   const pid_t pid = fork();
   if (pid == 0) {
+    const int devnull = open("/dev/null", O_RDONLY);
+    dup2(devnull, STDIN_FILENO);
     dup2(fileno(out), STDOUT_FILENO);
     dup2(fileno(err), STDERR_FILENO);
     if (!cwd.empty() && chdir(cwd.c_str()) != 0) _exit(127);
-    std::vector<char*> argv;
-    std::string exe = UAVSIM_CLI;
-    argv.push_back(exe.data());
     std::vector<std::string> copy = args;
+    std::vector<char*> argv;
     for (auto& a : copy) argv.push_back(a.data());
     argv.push_back(nullptr);
-    execv(exe.c_str(), argv.data());
+    execv(argv[0], argv.data());
     _exit(127);
   }
   int status = 0;
@@ -68,6 +69,22 @@ CliResult RunCli(const std::vector<std::string>& args, const std::string& cwd) {
   fclose(out);
   fclose(err);
   return r;
+}
+
+CliResult RunCli(const std::vector<std::string>& args, const std::string& cwd) {
+  std::vector<std::string> argv{UAVSIM_CLI};
+  argv.insert(argv.end(), args.begin(), args.end());
+  return RunProgram(argv, cwd);
+}
+
+std::string FindOnPath(const std::string& program) {
+  const char* path = std::getenv("PATH");
+  std::istringstream dirs(path ? path : "");
+  for (std::string d; std::getline(dirs, d, ':');) {
+    const std::string candidate = (d.empty() ? std::string(".") : d) + "/" + program;
+    if (access(candidate.c_str(), X_OK) == 0) return candidate;
+  }
+  return "";
 }
 
 std::string TempDir(const std::string& tag) {

@@ -17,9 +17,13 @@ struct CliResult {
   std::string err;
 };
 
-// Runs build/uavsim with `args` (no shell), in the working directory `cwd`
-// if non-empty.
+// Runs `args` (args[0] a path; no shell), stdin from /dev/null, in the
+// working directory `cwd` if non-empty, capturing what it says.
+CliResult RunProgram(const std::vector<std::string>& args, const std::string& cwd = "");
+// Runs build/uavsim with `args` as RunProgram does.
 CliResult RunCli(const std::vector<std::string>& args, const std::string& cwd = "");
+// The path of `program` on $PATH, or "" if it is not there.
+std::string FindOnPath(const std::string& program);
 
 // A fresh empty temporary folder, removed at the end of the test process.
 std::string TempDir(const std::string& tag);

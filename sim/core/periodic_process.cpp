@@ -111,7 +111,8 @@ void PeriodicProcess::ScheduleNext() {
     pending_ = EventId();
     return;
   }
-  pending_ = sim_->ScheduleAt(JitteredTime(next_tick_, nominal_ns), [this] { Fire(); });
+  pending_time_ns_ = JitteredTime(next_tick_, nominal_ns);
+  pending_ = sim_->ScheduleAt(pending_time_ns_, [this] { Fire(); });
 }
 
 void PeriodicProcess::Fire() {

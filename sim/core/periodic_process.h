@@ -25,6 +25,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <optional>
 
 #include "sim/core/rng.h"
 #include "sim/core/simulator.h"
@@ -70,6 +71,13 @@ class PeriodicProcess {
   // delivered (false already inside that last tick's callback).
   bool running() const { return pending_.valid(); }
 
+  // When the next tick will be delivered (jitter included), if one is
+  // scheduled. Inside the callback this is already the following tick, so
+  // a component may start that tick's work ahead of time.
+  std::optional<SimTime> next_delivery() const {
+    return running() ? std::optional<SimTime>(pending_time_ns_) : std::nullopt;
+  }
+
   // The nominal time of tick k >= 0: phase + round(k * 1e9 / rate_hz) ns,
   // saturating at kTimeMax.
   SimTime NominalTime(std::int64_t k) const;
@@ -95,6 +103,7 @@ class PeriodicProcess {
   std::int64_t next_tick_ = 0;
   SimTime last_delivered_ns_ = 0;
   EventId pending_;  // the scheduled next tick; default when none
+  SimTime pending_time_ns_ = 0;
 };
 
 }  // namespace uavsim::core

@@ -4,11 +4,14 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <chrono>
 #include <filesystem>
 #include <sstream>
 #include <thread>
+#include <tuple>
+#include <vector>
 
 #include "sim/core/json_io.h"
 #include "test_support.h"
@@ -29,7 +32,7 @@ std::size_t CountLines(const std::string& s) {
 
 // The run files with the wall-clock fields removed.
 Json WithoutWallClock(Json j) {
-  for (const char* k : {"wall_s", "realtime_factor", "started_utc"}) j.erase(k);
+  for (const char* k : {"wall_s", "realtime_factor", "profile_s", "started_utc"}) j.erase(k);
   return j;
 }
 }  // namespace
@@ -136,6 +139,30 @@ TEST_CASE("CLI: run writes the run directory of DESIGN.md", "[sim]") {
   CHECK(rates.find(",uavloc,") != std::string::npos);
   CHECK(metrics["uavloc_model"]["same_layout"] == true);
 
+  // Where the time went: every node's capture, pre-processing and encoding,
+  // each method, the beams, the writing; "other" is the rest of wall_s, so
+  // the parts sum to wall_s, or more when nodes capture on threads of their
+  // own at the same time as the event loop runs.
+  const Json& profile = metrics["profile_s"];
+  INFO(profile.dump(2));
+  REQUIRE(profile.is_object());
+  const Json& nodes = Json::parse(ReadFile(out + "/manifest.json"))["scenario"]["nodes"];
+  REQUIRE(nodes.size() == 3);
+  for (const Json& node : nodes)
+    for (const char* part : {"capture", "preprocess", "encode"})
+      CHECK(profile.contains("node/" + node["id"].get<std::string>() + "/" + part));
+  for (const char* part : {"setup", "edge/uavloc", "edge/ekf", "beams", "write", "other"})
+    CHECK(profile.contains(part));
+  double sum = 0.0;
+  for (const auto& [part, seconds] : profile.items()) {
+    CHECK(seconds.get<double>() >= 0.0);
+    sum += seconds.get<double>();
+  }
+  CHECK(sum >= metrics["wall_s"].get<double>() * (1.0 - 1e-9));
+  // Nothing recorded: no record part.
+  for (const auto& [part, seconds] : profile.items())
+    CHECK(part.find("/record") == std::string::npos);
+
   const Json manifest = Json::parse(ReadFile(out + "/manifest.json"));
   CHECK(manifest["seed"] == 1);
   CHECK(manifest["uavsim_version"] == "0.1.0");
@@ -183,6 +210,55 @@ TEST_CASE("CLI: the same scenario and seed give byte-identical files, another se
   CHECK(WithoutWallClock(Json::parse(ReadFile(a + "/metrics.json"))) ==
         WithoutWallClock(Json::parse(ReadFile(b + "/metrics.json"))));
   CHECK(ReadFile(a + "/truth.csv") != ReadFile(c + "/truth.csv"));
+}
+
+TEST_CASE("CLI: execution settings change no output byte: static cache, parallel nodes", "[sim]") {
+  const std::string dir = TempDir("execution");
+  // Rain, fog and a distractor UAV, every sensor recorded, both methods:
+  // each setting on and off must give the same files.
+  const auto run = [&](const std::string& name, bool cache, bool parallel) {
+    const std::string out = dir + "/" + name;
+    auto r = RunCli({"run", kDefault, "--out", out, "--quiet", "--duration", "2.5", "--record",
+                     "camera,lidar,radar", "--set", "/weather/rain_mm_h=8", "--set",
+                     "/weather/fog_visibility_m=600", "--set",
+                     std::string("/execution/static_cache=") + (cache ? "true" : "false"), "--set",
+                     std::string("/execution/parallel_nodes=") + (parallel ? "true" : "false")});
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    return out;
+  };
+  const std::string serial = run("serial", false, false);
+  const std::vector<std::string> files = [&] {
+    std::vector<std::string> f;
+    for (const auto& e : fs::recursive_directory_iterator(serial))
+      if (e.is_regular_file()) f.push_back(fs::relative(e.path(), serial).string());
+    std::sort(f.begin(), f.end());
+    return f;
+  }();
+  REQUIRE(std::count_if(files.begin(), files.end(), [](const std::string& f) {
+            return f.rfind("frames/camera/left/", 0) == 0;
+          }) == 75);
+  for (const auto& [name, cache, parallel] : std::vector<std::tuple<std::string, bool, bool>>{
+           {"cached", true, false}, {"parallel", false, true}, {"both", true, true}}) {
+    INFO(name);
+    const std::string out = run(name, cache, parallel);
+    for (const std::string& f : files) {
+      INFO(f);
+      REQUIRE(fs::exists(out + "/" + f));
+      if (f == "metrics.json") {
+        CHECK(WithoutWallClock(Json::parse(ReadFile(out + "/" + f))) ==
+              WithoutWallClock(Json::parse(ReadFile(serial + "/" + f))));
+      } else if (f == "manifest.json") {
+        Json a = WithoutWallClock(Json::parse(ReadFile(out + "/" + f)));
+        Json b = WithoutWallClock(Json::parse(ReadFile(serial + "/" + f)));
+        a["scenario"].erase("execution");
+        b["scenario"].erase("execution");
+        CHECK(a == b);
+      } else {
+        CHECK(ReadFile(out + "/" + f) == ReadFile(serial + "/" + f));
+      }
+    }
+  }
 }
 
 TEST_CASE("CLI: a killed run leaves nothing under its final name", "[sim]") {

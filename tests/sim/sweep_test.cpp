@@ -26,8 +26,10 @@
 namespace fs = std::filesystem;
 using uavsim::core::Json;
 using uavsim::testing::CliResult;
+using uavsim::testing::FindOnPath;
 using uavsim::testing::ReadFile;
 using uavsim::testing::RunCli;
+using uavsim::testing::RunProgram;
 using uavsim::testing::TempDir;
 using uavsim::testing::WriteFile;
 
@@ -112,7 +114,7 @@ std::vector<std::string> FileList(const std::string& root) {
 
 // A run file with the wall-clock fields removed.
 Json WithoutWallClock(Json j) {
-  for (const char* k : {"wall_s", "realtime_factor", "started_utc"}) j.erase(k);
+  for (const char* k : {"wall_s", "realtime_factor", "profile_s", "started_utc"}) j.erase(k);
   return j;
 }
 
@@ -138,45 +140,6 @@ bool IsPng(const std::string& path) {
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) return false;
   return ReadFile(path).rfind("\x89PNG\r\n\x1a\n", 0) == 0;
-}
-
-// Runs `argv` (argv[0] a path; no shell), stdin from /dev/null, capturing
-// what it says.
-CliResult RunProgram(const std::vector<std::string>& args) {
-  std::vector<std::string> copy = args;
-  std::vector<char*> argv;
-  for (auto& a : copy) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  FILE* out = tmpfile();
-  FILE* err = tmpfile();
-  const pid_t pid = fork();
-  if (pid == 0) {
-    const int devnull = open("/dev/null", O_RDONLY);
-    dup2(devnull, STDIN_FILENO);
-    dup2(fileno(out), STDOUT_FILENO);
-    dup2(fileno(err), STDERR_FILENO);
-    execv(argv[0], argv.data());
-    _exit(127);
-  }
-  int status = 0;
-  waitpid(pid, &status, 0);
-  CliResult r;
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  std::fflush(out);
-  std::fflush(err);
-  const auto slurp = [](FILE* f) {
-    std::string s;
-    char buf[4096];
-    std::rewind(f);
-    std::size_t n;
-    while ((n = std::fread(buf, 1, sizeof buf, f)) > 0) s.append(buf, n);
-    return s;
-  };
-  r.out = slurp(out);
-  r.err = slurp(err);
-  std::fclose(out);
-  std::fclose(err);
-  return r;
 }
 
 // `uavsim ARGS...` started in the background as the leader of a process
@@ -258,16 +221,6 @@ class Background {
   bool ended_ = false;
   int rc_ = -1;
 };
-
-std::string FindOnPath(const std::string& program) {
-  const char* path = std::getenv("PATH");
-  std::istringstream dirs(path ? path : "");
-  for (std::string d; std::getline(dirs, d, ':');) {
-    const std::string candidate = (d.empty() ? std::string(".") : d) + "/" + program;
-    if (access(candidate.c_str(), X_OK) == 0) return candidate;
-  }
-  return "";
-}
 
 // The uninterrupted local sweep every other way of running is compared
 // with: loss p over a range (0.2, 0.3) times seeds 1 and 2, four points,

@@ -28,8 +28,10 @@
 
 namespace fs = std::filesystem;
 using uavsim::core::Json;
+using uavsim::testing::FindOnPath;
 using uavsim::testing::ReadFile;
 using uavsim::testing::RunCli;
+using uavsim::testing::RunProgram;
 using uavsim::testing::TempDir;
 using uavsim::testing::WriteFile;
 
@@ -49,7 +51,9 @@ TEST_CASE("CLI: train --quick learns, is deterministic, and its model runs in th
           "[sim][train]") {
   const std::string dir = TempDir("train");
   const std::string model = dir + "/model", data = dir + "/episodes.bin";
-  auto r = RunCli({"train", kDefault, "--quick", "--out", model, "--data", data, "--quiet"});
+  // Two episodes at a time (the episodes do not depend on it: see the --jobs test).
+  auto r = RunCli(
+      {"train", kDefault, "--quick", "--jobs", "2", "--out", model, "--data", data, "--quiet"});
   INFO(r.err);
   REQUIRE(r.exit_code == 0);
   CHECK(r.out.empty());
@@ -350,6 +354,62 @@ TEST_CASE("The default model: three modalities beat each single one on held-out 
     INFO(single << " " << ev.rmse_m.at(single) << " m, all " << ev.rmse_m.at("all") << " m");
     CHECK(ev.rmse_m.at("all") < ev.rmse_m.at(single));
   }
+}
+
+TEST_CASE("CLI: train --jobs 2 and mpirun simulate the episodes one job does, byte for byte",
+          "[sim][train]") {
+  const std::string dir = TempDir("train-jobs");
+  // Three short episodes and one epoch a stage: this is about the episodes.
+  const std::vector<std::string> common{"train",
+                                        kDefault,
+                                        "--quick",
+                                        "--episodes",
+                                        "3",
+                                        "--episode-s",
+                                        "4",
+                                        "--config-set",
+                                        "/stage1_max_epochs=1",
+                                        "--config-set",
+                                        "/stage2_max_epochs=1",
+                                        "--quiet"};
+  const auto train = [&](const std::string& name, std::vector<std::string> extra,
+                         const std::string& launcher = "") {
+    std::vector<std::string> args = common;
+    args.insert(args.end(), {"--out", dir + "/" + name, "--data", dir + "/" + name + ".bin"});
+    args.insert(args.end(), extra.begin(), extra.end());
+    if (launcher.empty()) return RunCli(args);
+    std::vector<std::string> argv{launcher,          "-np",   "2",   "--allow-run-as-root",
+                                  "--oversubscribe", "--mca", "btl", "self,vader",
+                                  UAVSIM_CLI};
+    argv.insert(argv.end(), args.begin(), args.end());
+    return RunProgram(argv);
+  };
+  const auto one = train("one", {"--jobs", "1"});
+  INFO(one.err);
+  REQUIRE(one.exit_code == 0);
+  const auto two = train("two", {"--jobs", "2"});
+  INFO(two.err);
+  REQUIRE(two.exit_code == 0);
+  const std::string episodes = ReadFile(dir + "/one.bin");
+  CHECK(episodes.size() > 1000);
+  CHECK(ReadFile(dir + "/two.bin") == episodes);
+  // The same episodes train the same weights; no scratch folder is left.
+  for (const char* f : {"camera.pt", "uavloc.pt"}) {
+    INFO(f);
+    CHECK(ReadFile(dir + "/one/" + f) == ReadFile(dir + "/two/" + f));
+  }
+  for (const auto& e : fs::recursive_directory_iterator(dir))
+    CHECK(e.path().filename().string().find("partial") == std::string::npos);
+
+  const std::string mpirun = FindOnPath("mpirun");
+  if (mpirun.empty()) FAIL("mpirun is not on PATH (Debian: apt-get install openmpi-bin)");
+  const auto ranks = train("mpi", {"--jobs", "1"}, mpirun);
+  INFO("mpirun said: " << ranks.out << ranks.err);
+  REQUIRE(ranks.exit_code == 0);
+  CHECK(ReadFile(dir + "/mpi.bin") == episodes);
+  CHECK(ReadFile(dir + "/mpi/uavloc.pt") == ReadFile(dir + "/one/uavloc.pt"));
+
+  CHECK(RunCli({"train", kDefault, "--jobs", "0"}).exit_code == 2);
 }
 
 TEST_CASE("CLI: an interrupted training leaves no model and no episode file", "[sim][train]") {
