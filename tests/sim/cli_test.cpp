@@ -146,7 +146,8 @@ TEST_CASE("CLI: run writes the run directory of DESIGN.md", "[sim]") {
   const Json& profile = metrics["profile_s"];
   INFO(profile.dump(2));
   REQUIRE(profile.is_object());
-  const Json& nodes = Json::parse(ReadFile(out + "/manifest.json"))["scenario"]["nodes"];
+  const Json run_manifest = Json::parse(ReadFile(out + "/manifest.json"));
+  const Json& nodes = run_manifest["scenario"]["nodes"];
   REQUIRE(nodes.size() == 3);
   for (const Json& node : nodes)
     for (const char* part : {"capture", "preprocess", "encode"})
