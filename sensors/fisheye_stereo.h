@@ -31,17 +31,36 @@
 // kSubsamples x kSubsamples stratified rays (objects whose image spans more
 // than kMaxSubsampledSpanPx pixels are resolved by the pixel centres alone).
 //
+// Static-scene cache (set_static_cache, on by default): the cameras and the
+// static world never move, so each eye keeps the radiance of every valid
+// pixel's centre ray cast against the static world alone
+// (RaycastScene::IntersectManyStatic), built at the first Capture and
+// rebuilt whenever the frame's light (illumination, exposure, fog and rain
+// extinction) differs in any bit. Each frame re-casts against the full scene
+// only the packets of 8 pixels of a row (the packets the full render casts)
+// with a ray that meets a sphere enclosing a moving object as the scene is
+// posed (RaycastScene::moving_object_bounds, widened by 1 % + 1 cm); the
+// sub-pixel integration, rain streaks and noise are per frame as before.
+// The images are bit-identical to the full render's (the cache off): a ray
+// that meets no moving object gets the same hit from either top level when
+// its whole packet does, and the moving objects cast no shadows, so nothing
+// else in a pixel's radiance depends on them. An eye whose centre is not
+// inside the static world's bounds (where that argument does not hold), or
+// that lies inside a moving object's sphere, renders every pixel that frame.
+//
 // Determinism: Capture draws exactly one 64-bit value from `noise`; every
 // pixel's noise comes from a stream derived from (that value, eye, row), so
 // the images are the same whatever the number of threads.
 // Threads: Capture runs tbb::parallel_for over rows; it may run concurrently
 // with other const calls on the same scene (the scene must not be posed
-// meanwhile). The scene must outlive the camera.
+// meanwhile), but not with another Capture of the same camera. The scene
+// must outlive the camera.
 #pragma once
 
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <utility>
 #include <vector>
 
@@ -66,16 +85,30 @@ class FisheyeStereo {
 
   // Computes the per-pixel ray table once.
   FisheyeStereo(const FisheyeStereoConfig& config, const RaycastScene& scene);
+  ~FisheyeStereo();
+  FisheyeStereo(FisheyeStereo&&) noexcept;
+  FisheyeStereo& operator=(FisheyeStereo&&) = delete;  // holds a reference to the scene
 
   // Renders both eyes of the scene as it is posed now (the caller has called
   // scene.SetTime(t_s)); t_s is stamped on the frame.
   StereoFrame Capture(double t_s, const core::WeatherConfig& weather, core::RngStream& noise) const;
+
+  // Both eyes' linear radiance (left, then right; row-major, 0 outside the
+  // lens) as Capture computes it before rain streaks and sensor noise: the
+  // same rays, cache and sub-pixel integration. Draws no randomness; for
+  // comparing renders more finely than 8 bits.
+  std::vector<float> CaptureRadiance(double t_s, const core::WeatherConfig& weather) const;
 
   // Objects whose pixels Capture integrates over their area (see above);
   // called once per Capture with its t_s. Unset: pixel centres only.
   void set_small_objects(SmallObjectsFunction small_objects) {
     small_objects_ = std::move(small_objects);
   }
+
+  // The static-scene cache (see above): on by default; off renders every
+  // pixel every frame. Either way the images are the same.
+  void set_static_cache(bool on) { static_cache_ = on; }
+  bool static_cache() const { return static_cache_; }
 
   // At most `max_threads` threads for Capture (0: TBB's default, all cores).
   // Does not change the images.
@@ -90,8 +123,12 @@ class FisheyeStereo {
   // The world-frame rays Capture casts for one eye (valid pixels, row-major),
   // for benchmarks that time the same rays through other APIs.
   std::vector<Ray> WorldRays(Eye eye) const;
-  // Rays cast per Capture: the valid pixels of both eyes.
+  // Rays cast per Capture without the cache: the valid pixels of both eyes.
   std::size_t rays_per_frame() const { return 2 * table_.valid_count; }
+  // Rays the last Capture cast, all included: pixel centres (against the
+  // full scene, or the static world when it built the cache) and sub-pixel
+  // rays. 0 before the first Capture.
+  std::size_t last_capture_rays() const;
 
  private:
   struct Light;
@@ -99,6 +136,24 @@ class FisheyeStereo {
   struct PixelBox {
     int u0, v0, u1, v1;  // inclusive
   };
+  // The cone (world frame) holding the directions of one packet of 8 pixel
+  // centres of a row, as RaycastScene::IntersectMany groups them.
+  struct PacketCone {
+    Eigen::Vector3d axis;
+    double cos_half, sin_half;  // of the half-angle, at most 90 degrees
+  };
+  // A moving object's sphere as an eye sees it: the cone of directions that
+  // meet it.
+  struct ObjectCone {
+    Eigen::Vector3d axis;
+    double cos_half, sin_half;
+  };
+  // How an eye casts its pixel centres this frame.
+  struct EyePlan {
+    bool full = true;                 // every pixel against the full scene
+    std::vector<ObjectCone> objects;  // else: the cache, re-casting packets that meet these
+  };
+  struct Cache;
 
   Light FrameLight(const core::WeatherConfig& weather) const;
   std::vector<Streak> RainStreaks(double rain_mm_h, core::RngStream rng) const;
@@ -106,10 +161,23 @@ class FisheyeStereo {
   float SubsampledRadiance(int eye, int u, int v, const Light& light, std::vector<Ray>& rays,
                            std::vector<RayHit>& hits) const;
   float Radiance(const RayHit& hit, const Eigen::Vector3f& direction_W, const Light& light) const;
-  void RenderRow(int eye, int v, const Light& light, const std::vector<Streak>& streaks,
-                 const std::vector<PixelBox>& boxes, std::uint64_t frame_key,
-                 std::vector<Ray>& rays, std::vector<RayHit>& hits, std::vector<float>& radiance,
-                 std::uint8_t* out) const;
+  template <typename RowFunction>
+  void ForEachRow(int rows, RowFunction&& row) const;
+  std::size_t BuildCache(const Light& light) const;
+  std::vector<EyePlan> PlanEyes() const;
+  bool PacketMeets(std::size_t packet, std::uint32_t first, std::uint32_t count,
+                   const std::vector<ObjectCone>& objects) const;
+  std::size_t CenterRadiance(int eye, int v, const Light& light, const EyePlan& plan,
+                             std::vector<Ray>& rays, std::vector<RayHit>& hits,
+                             std::vector<float>& radiance) const;
+  // Renders into `frame` (streaks and noise from frame_key) and/or
+  // `radiance` (2 w h floats).
+  void Render(double t_s, const core::WeatherConfig& weather, std::uint64_t frame_key,
+              StereoFrame* frame, std::vector<float>* radiance) const;
+  std::size_t RenderRow(int eye, int v, const Light& light, const std::vector<Streak>& streaks,
+                        const std::vector<PixelBox>& boxes, const EyePlan& plan,
+                        std::uint64_t frame_key, std::vector<Ray>& rays, std::vector<RayHit>& hits,
+                        std::vector<float>& radiance, float* radiance_out, std::uint8_t* out) const;
 
   FisheyeStereoConfig config_;
   const RaycastScene& scene_;
@@ -121,11 +189,16 @@ class FisheyeStereo {
   std::vector<Eigen::Vector3f> direction_W_;
   std::vector<std::uint32_t> row_begin_;
   std::vector<std::uint16_t> column_;
+  std::vector<PacketCone>
+      packets_;  // row v's packets: packet_begin_[v] .. packet_begin_[v + 1] - 1
+  std::vector<std::uint32_t> packet_begin_;
   Eigen::Vector3f sun_W_;
   bool sun_up_;
   std::vector<std::uint8_t> encode_;  // linear [0, 1] in 65536 steps -> gamma-encoded 8 bits
   SmallObjectsFunction small_objects_;
   int max_threads_ = 0;
+  bool static_cache_ = true;
+  std::unique_ptr<Cache> cache_;  // filled by Capture
 };
 
 }  // namespace uavsim::sensors

@@ -2,6 +2,7 @@
 
 #include <embree3/rtcore.h>
 
+#include <algorithm>
 #include <cmath>
 #include <mutex>
 #include <stdexcept>
@@ -48,6 +49,7 @@ struct RaycastScene::Impl {
   RTCDevice device = nullptr;
   RTCScene static_scene = nullptr;
   RTCScene top = nullptr;
+  RTCScene static_top = nullptr;                 // the static instance alone
   std::vector<RTCScene> object_scenes;           // index k - 1 for moving object k
   std::vector<std::uint32_t> static_material;    // by geomID in static_scene
   std::vector<std::uint32_t> object_material;    // by object id (index 0 unused)
@@ -63,6 +65,7 @@ struct RaycastScene::Impl {
   ~Impl() {
     for (RTCScene s : object_scenes) rtcReleaseScene(s);
     if (top) rtcReleaseScene(top);
+    if (static_top) rtcReleaseScene(static_top);
     if (static_scene) rtcReleaseScene(static_scene);
     if (device) rtcReleaseDevice(device);
   }
@@ -90,13 +93,13 @@ struct RaycastScene::Impl {
     return geom;
   }
 
-  void AttachInstance(RTCScene child, unsigned id, const Eigen::Isometry3d& X) {
+  void AttachInstance(RTCScene parent, RTCScene child, unsigned id, const Eigen::Isometry3d& X) {
     RTCGeometry inst = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_INSTANCE);
     rtcSetGeometryInstancedScene(inst, child);
     rtcSetGeometryTimeStepCount(inst, 1);
     SetTransform(inst, X);
     rtcCommitGeometry(inst);
-    rtcAttachGeometryByID(top, inst, id);
+    rtcAttachGeometryByID(parent, inst, id);
     rtcReleaseGeometry(inst);
     Check("attach instance");
   }
@@ -157,14 +160,17 @@ RaycastScene::RaycastScene(const core::WorldGeometry& world)
   s.Check("building the static world");
 
   // The top level holds only instances, so moving objects re-commit a BVH of
-  // a handful of boxes, never the city.
-  s.top = rtcNewScene(s.device);
-  rtcSetSceneFlags(s.top, RTC_SCENE_FLAG_DYNAMIC);
-  rtcSetSceneBuildQuality(s.top, RTC_BUILD_QUALITY_LOW);
-  s.AttachInstance(s.static_scene, kStaticInstanceId, Eigen::Isometry3d::Identity());
+  // a handful of boxes, never the city. The static-only top level is built
+  // the same way, so the two differ only by the moving instances.
+  for (RTCScene* top : {&s.top, &s.static_top}) {
+    *top = rtcNewScene(s.device);
+    rtcSetSceneFlags(*top, RTC_SCENE_FLAG_DYNAMIC);
+    rtcSetSceneBuildQuality(*top, RTC_BUILD_QUALITY_LOW);
+    s.AttachInstance(*top, s.static_scene, kStaticInstanceId, Eigen::Isometry3d::Identity());
+    rtcCommitScene(*top);
+  }
   s.object_material.push_back(0);
   s.object_rotation.push_back(Eigen::Matrix3f::Identity());
-  rtcCommitScene(s.top);
   s.Check("building the top level");
 }
 
@@ -222,9 +228,14 @@ int RaycastScene::AddMovingObject(const core::TriangleMesh& mesh, PoseFunction X
   s.object_scenes.push_back(child);
   const int id = static_cast<int>(s.object_scenes.size());
   const Eigen::Isometry3d X0 = X_WO(time_s_);
-  s.AttachInstance(child, static_cast<unsigned>(id), X0);
+  s.AttachInstance(s.top, child, static_cast<unsigned>(id), X0);
   s.object_material.push_back(mesh.material);
   s.object_rotation.push_back(X0.linear().cast<float>());
+  double radius_m = 0.0;
+  for (const Eigen::Vector3f& v : mesh.vertices_m)
+    radius_m = std::max(radius_m, v.cast<double>().norm());
+  object_radius_m_.push_back(radius_m);
+  moving_bounds_.push_back({X0.translation(), radius_m});
   poses_.push_back(std::move(X_WO));
   rtcCommitScene(s.top);
   s.Check("adding a moving object");
@@ -240,6 +251,7 @@ void RaycastScene::SetTime(double t_s) {
     Impl::SetTransform(inst, X);
     rtcCommitGeometry(inst);
     s.object_rotation[id] = X.linear().cast<float>();
+    moving_bounds_[k] = {X.translation(), object_radius_m_[k]};
   }
   if (!poses_.empty()) rtcCommitScene(s.top);
   s.Check("moving objects");
@@ -258,6 +270,22 @@ RayHit RaycastScene::Intersect(const Ray& ray) const {
 }
 
 void RaycastScene::IntersectMany(const Ray* rays, RayHit* hits, std::size_t count) const {
+  IntersectPackets(false, rays, hits, count);
+}
+
+// Rays cast from inside the static world's bounds all enter the static
+// instance, with tfar still infinite, in either top level: every box on the
+// way to it contains the static bounds, and a ray's far distance shrinks
+// only where it meets a moving object first. So Embree's choices inside the
+// static BVH (octant groups, packet or single-ray traversal by the count of
+// active rays) are the same, and so are the hits.
+void RaycastScene::IntersectManyStatic(const Ray* rays, RayHit* hits, std::size_t count) const {
+  IntersectPackets(true, rays, hits, count);
+}
+
+void RaycastScene::IntersectPackets(bool static_only, const Ray* rays, RayHit* hits,
+                                    std::size_t count) const {
+  RTCScene scene = static_only ? impl_->static_top : impl_->top;
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
@@ -283,7 +311,7 @@ void RaycastScene::IntersectMany(const Ray* rays, RayHit* hits, std::size_t coun
       packet.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
       packet.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
     }
-    rtcIntersect8(valid, impl_->top, &ctx, &packet);
+    rtcIntersect8(valid, scene, &ctx, &packet);
     for (std::size_t i = 0; i < n; ++i) {
       RTCRayHit one;
       one.ray.tfar = packet.ray.tfar[i];
@@ -295,6 +323,13 @@ void RaycastScene::IntersectMany(const Ray* rays, RayHit* hits, std::size_t coun
       hits[base + i] = impl_->ToHit(one, rays[base + i].direction);
     }
   }
+}
+
+Eigen::AlignedBox3d RaycastScene::static_bounds() const {
+  RTCBounds b;
+  rtcGetSceneBounds(impl_->static_scene, &b);
+  return Eigen::AlignedBox3d(Eigen::Vector3d(b.lower_x, b.lower_y, b.lower_z),
+                             Eigen::Vector3d(b.upper_x, b.upper_y, b.upper_z));
 }
 
 Eigen::Vector3d RaycastScene::PointVelocity(int object, const Eigen::Vector3d& p_W,

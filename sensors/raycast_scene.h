@@ -1,7 +1,8 @@
 // The one owner of Embree (version 3). Holds the static world in one BVH,
 // built once, and each moving object (UAV, bird) as an instance of its own
 // small BVH; SetTime() moves the instances by their pose functions and
-// re-commits only the top level (no rebuild of the city).
+// re-commits only the top level (no rebuild of the city). A second top level
+// holds the static instance alone, for caches of what never moves.
 //
 // Thread safety: Intersect/Occluded may be called from many threads at once;
 // SetTime and AddMovingObject may not run concurrently with anything on the
@@ -77,6 +78,13 @@ class RaycastScene {
   // Closest hits of many rays: coherent rays go through Embree's packet API
   // (groups of 8); hits[i] answers rays[i].
   void IntersectMany(const Ray* rays, RayHit* hits, std::size_t count) const;
+  // As IntersectMany, the same packets, against the static world alone (a
+  // top level holding only its instance, built like the full one). For a
+  // packet none of whose rays meets a moving object, cast from a point inside
+  // static_bounds(), the hits are bit-identical to IntersectMany's: Embree
+  // enters the static instance with the same rays in both top levels (see
+  // the .cpp).
+  void IntersectManyStatic(const Ray* rays, RayHit* hits, std::size_t count) const;
   // True if anything blocks the segment from a to b (ends excluded by `eps_m`).
   bool Occluded(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double eps_m = 1e-3) const;
 
@@ -84,6 +92,14 @@ class RaycastScene {
   // t_s (central difference of its pose function over +-1 ms); zero for the
   // static world (object 0).
   Eigen::Vector3d PointVelocity(int object, const Eigen::Vector3d& p_W, double t_s) const;
+
+  // Spheres enclosing every moving object's mesh as posed at the last SetTime
+  // (or AddMovingObject): centre the object's origin, radius its farthest
+  // vertex from it. Index k - 1 for object k. Exact up to float rounding of
+  // the mesh and of Embree's instance transform (about 1e-7 relative).
+  const std::vector<BoundingSphere>& moving_object_bounds() const { return moving_bounds_; }
+  // The static world's axis-aligned bounds as Embree reports them.
+  Eigen::AlignedBox3d static_bounds() const;
 
   const core::Material& material(std::uint32_t index) const { return materials_[index]; }
   std::size_t moving_object_count() const { return poses_.size(); }
@@ -94,9 +110,13 @@ class RaycastScene {
   RaycastScene(const RaycastScene& other, ViewTag);
 
   struct Impl;
+  void IntersectPackets(bool static_only, const Ray* rays, RayHit* hits, std::size_t count) const;
+
   std::unique_ptr<Impl> impl_;
   std::vector<core::Material> materials_;
   std::vector<PoseFunction> poses_;
+  std::vector<double> object_radius_m_;  // farthest vertex from the origin, by object id - 1
+  std::vector<BoundingSphere> moving_bounds_;
   std::size_t static_triangles_ = 0;
   double time_s_ = 0.0;
 };
