@@ -180,6 +180,8 @@ RaycastScene::RaycastScene(const RaycastScene& other, ViewTag)
     : impl_(std::make_unique<Impl>()),
       materials_(other.materials_),
       poses_(other.poses_),
+      object_radius_m_(other.object_radius_m_),
+      moving_bounds_(other.moving_bounds_),
       static_triangles_(other.static_triangles_),
       time_s_(other.time_s_) {
   const Impl& o = *other.impl_;
@@ -194,15 +196,18 @@ RaycastScene::RaycastScene(const RaycastScene& other, ViewTag)
   s.static_material = o.static_material;
   s.object_material = o.object_material;
   s.object_rotation = o.object_rotation;
+  // The static-only top level never changes: shared too.
+  s.static_top = o.static_top;
+  rtcRetainScene(s.static_top);
   s.top = rtcNewScene(s.device);
   rtcSetSceneFlags(s.top, RTC_SCENE_FLAG_DYNAMIC);
   rtcSetSceneBuildQuality(s.top, RTC_BUILD_QUALITY_LOW);
-  s.AttachInstance(s.static_scene, kStaticInstanceId, Eigen::Isometry3d::Identity());
+  s.AttachInstance(s.top, s.static_scene, kStaticInstanceId, Eigen::Isometry3d::Identity());
   for (std::size_t k = 0; k < o.object_scenes.size(); ++k) {
     RTCScene child = o.object_scenes[k];
     rtcRetainScene(child);
     s.object_scenes.push_back(child);
-    s.AttachInstance(child, static_cast<unsigned>(k + 1), poses_[k](time_s_));
+    s.AttachInstance(s.top, child, static_cast<unsigned>(k + 1), poses_[k](time_s_));
   }
   rtcCommitScene(s.top);
   s.Check("making a view of the scene");

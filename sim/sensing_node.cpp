@@ -51,6 +51,7 @@ class CameraNodeSensor final : public NodeSensor {
         preprocess_(node.sensor.fisheye, s.pipeline.preprocess) {
     WorldModel& world = c_.world;
     camera_.set_small_objects([&world](double t_s) { return world.SmallObjects(t_s); });
+    camera_.set_static_cache(s.execution.static_cache);
   }
 
  private:
