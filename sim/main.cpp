@@ -19,6 +19,7 @@
 #include "sim/bench_beam.h"
 #include "sim/bench_events.h"
 #include "sim/bench_link.h"
+#include "sim/bench_noise.h"
 #include "sim/bench_pipeline.h"
 #include "sim/bench_radar.h"
 #include "sim/bench_raycast.h"
@@ -51,7 +52,7 @@ const char* kMainHelp =
     "  run SCENARIO.json          run a scenario and write its run directory\n"
     "  sweep SPEC.json            run a grid of scenarios (packet loss x weather x seeds)\n"
     "  train SCENARIO.json        train the UAVLoc model by simulation\n"
-    "  bench [raycast|radar|events|link|beam|pipeline|all]   measure the hot paths\n"
+    "  bench [raycast|radar|events|link|beam|pipeline|noise|all]   measure the hot paths\n"
     "\n"
     "options: --help (also after a command), --version, --quiet (every command)\n"
     "exit codes: 0 ok, 1 failure while running, 2 bad input or usage, 130 interrupted\n";
@@ -161,7 +162,7 @@ const char* kTrainHelp =
     "--position-loss and --label-gate were replaced by training config keys (issue 17).\n";
 
 const char* kBenchHelp =
-    "usage: uavsim bench [raycast|radar|events|link|beam|pipeline|all] [--quiet]\n"
+    "usage: uavsim bench [raycast|radar|events|link|beam|pipeline|noise|all] [--quiet]\n"
     "\n"
     "  raycast    Embree rtcIntersect1 throughput vs each sensor's rays per second in the\n"
     "             default city; the camera's packet speed-up; camera + LiDAR real-time factor\n"
@@ -172,6 +173,7 @@ const char* kBenchHelp =
     "  beam       downlink beam evaluations per second (channel, steering, gain)\n"
     "  pipeline   IB-CC encode per frame (camera, LiDAR, radar) and edge inference per\n"
     "             window, one thread\n"
+    "  noise      standard normals per second: counter-based Ziggurat vs RngStream::Normal\n"
     "  all        everything available (default)\n";
 
 // Flags of one command: name -> takes a value.
@@ -512,6 +514,7 @@ int Bench(int argc, char** argv) {
       {"link", [&] { return uavsim::sim::BenchLink(quiet, std::cout); }},
       {"beam", [&] { return uavsim::sim::BenchBeam(quiet, std::cout); }},
       {"pipeline", [&] { return uavsim::sim::BenchPipeline(quiet, std::cout); }},
+      {"noise", [&] { return uavsim::sim::BenchNoise(quiet, std::cout); }},
   };
   int rc = kExitOk;
   bool found = false;
@@ -523,7 +526,7 @@ int Bench(int argc, char** argv) {
   }
   if (!found)
     throw UsageError("uavsim bench: unknown target '" + what +
-                     "' (raycast, events, link, beam, pipeline or all)");
+                     "' (raycast, radar, events, link, beam, pipeline, noise or all)");
   return rc;
 }
 
