@@ -8,6 +8,7 @@
 #include <atomic>
 #include <cmath>
 
+#include "sim/core/counter_normal.h"
 #include "sim/core/physical_constants.h"
 
 namespace uavsim::sensors {
@@ -363,10 +364,14 @@ std::size_t FisheyeStereo::RenderRow(int eye, int v, const Light& light,
     radiance[u] += static_cast<float>(s.alpha) * (streak_radiance - radiance[u]);
   }
 
-  // The noise of each row comes from its own stream, keyed by frame, eye and
-  // row, so threads may render rows in any order.
-  core::RngStream rng(
-      core::Mix64(frame_key ^ core::Mix64((static_cast<std::uint64_t>(eye) << 32) | v)));
+  // The noise of each row is the counter-based stream of (frame, eye, row),
+  // one standard normal per column, so threads may render rows in any order.
+  thread_local std::vector<float> noise;
+  noise.assign(w, 0.0f);
+  if (config_.sensor_noise)
+    core::CounterNormal(
+        core::Mix64(frame_key ^ core::Mix64((static_cast<std::uint64_t>(eye) << 32) | v)))
+        .Fill(0, noise.data(), noise.size());
   const double full_well = config_.full_well_e;
   const double read_variance = config_.read_noise_e * config_.read_noise_e;
   for (int u = 0; u < w; ++u) {
@@ -376,7 +381,7 @@ std::size_t FisheyeStereo::RenderRow(int eye, int v, const Light& light,
     }
     double electrons = static_cast<double>(radiance[u]) * full_well;
     if (config_.sensor_noise)
-      electrons += std::sqrt(std::max(electrons, 0.0) + read_variance) * rng.Normal();
+      electrons += std::sqrt(std::max(electrons, 0.0) + read_variance) * noise[u];
     const double x = std::clamp(electrons / full_well, 0.0, 1.0);
     out[u] = encode_[static_cast<std::size_t>(x * 65535.0 + 0.5)];
   }

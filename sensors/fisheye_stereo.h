@@ -49,8 +49,9 @@
 // that lies inside a moving object's sphere, renders every pixel that frame.
 //
 // Determinism: Capture draws exactly one 64-bit value from `noise`; every
-// pixel's noise comes from a stream derived from (that value, eye, row), so
-// the images are the same whatever the number of threads.
+// pixel's z is the counter-based normal (sim/core/counter_normal.h) of the
+// key (that value, eye, row) at its column, so the images are the same
+// whatever the number of threads.
 // Threads: Capture runs tbb::parallel_for over rows; it may run concurrently
 // with other const calls on the same scene (the scene must not be posed
 // meanwhile), but not with another Capture of the same camera. The scene
