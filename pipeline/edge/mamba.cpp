@@ -33,31 +33,6 @@ void MambaRegressorOptions::Validate() const {
   mamba.Validate();
 }
 
-torch::Tensor SelectiveScan(const torch::Tensor& u, const torch::Tensor& delta,
-                            const torch::Tensor& A, const torch::Tensor& Bm,
-                            const torch::Tensor& Cm, const torch::Tensor& D_skip,
-                            const torch::Tensor& z, const torch::Tensor& delta_bias,
-                            torch::Tensor* last_state) {
-  const torch::Tensor dt = torch::softplus(delta + delta_bias.unsqueeze(-1));
-  // Ā = exp(ΔA) and B̄u = ΔBu for every step up front, as selective_scan_ref.
-  const torch::Tensor deltaA = torch::exp(torch::einsum("bdl,dn->bdln", {dt, A}));
-  const torch::Tensor deltaB_u = torch::einsum("bdl,bnl,bdl->bdln", {dt, Bm, u});
-  const int64_t length = u.size(2);
-  // Eq. (27): h(k) = A(k) h(k-1) + B(k) x(k); the loop keeps only the two
-  // ops that must be sequential, and C is applied to all states at once.
-  torch::Tensor h = torch::zeros({u.size(0), A.size(0), A.size(1)}, u.options());
-  std::vector<torch::Tensor> states;
-  states.reserve(static_cast<std::size_t>(length));
-  for (int64_t l = 0; l < length; ++l) {
-    h = deltaA.select(2, l) * h + deltaB_u.select(2, l);
-    states.push_back(h);
-  }
-  if (last_state != nullptr) *last_state = h;
-  if (length == 0) return torch::zeros_like(u);
-  const torch::Tensor y = torch::einsum("bdln,bnl->bdl", {torch::stack(states, 2), Cm});
-  return (y + u * D_skip.unsqueeze(-1)) * torch::silu(z);
-}
-
 MambaBlockImpl::MambaBlockImpl(const MambaOptions& options) : options_(options) {
   options_.Validate();
   const int64_t d_model = options_.d_model;

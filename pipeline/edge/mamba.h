@@ -16,6 +16,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "pipeline/edge/selective_scan.h"  // SelectiveScan, the block's recurrence
+
 namespace uavsim::pipeline {
 
 struct MambaOptions {
@@ -40,17 +42,6 @@ struct MambaState {
   torch::Tensor conv;  // [B, d_inner, d_conv]: the conv's last d_conv inputs, newest last
   torch::Tensor ssm;   // [B, d_inner, d_state]: h(k) of Eq. (27)
 };
-
-// selective_scan_ref with variable B and C, from a zero state:
-//   Δ = softplus(delta + delta_bias), h_l = exp(Δ_l A) h_{l-1} + Δ_l B_l u_l,
-//   y_l = C_l h_l + D u_l, out = y · SiLU(z).
-// u, delta, z: [B, D, L]; A: [D, N]; Bm, Cm: [B, N, L]; D_skip, delta_bias:
-// [D]. Returns [B, D, L]; writes h_L ([B, D, N]) to *last_state if given.
-torch::Tensor SelectiveScan(const torch::Tensor& u, const torch::Tensor& delta,
-                            const torch::Tensor& A, const torch::Tensor& Bm,
-                            const torch::Tensor& Cm, const torch::Tensor& D_skip,
-                            const torch::Tensor& z, const torch::Tensor& delta_bias,
-                            torch::Tensor* last_state = nullptr);
 
 class MambaBlockImpl : public torch::nn::Module {
  public:
