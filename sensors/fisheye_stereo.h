@@ -39,14 +39,17 @@
 // extinction) differs in any bit. Each frame re-casts against the full scene
 // only the packets of 8 pixels of a row (the packets the full render casts)
 // with a ray that meets a sphere enclosing a moving object as the scene is
-// posed (RaycastScene::moving_object_bounds, widened by 1 % + 1 cm); the
-// sub-pixel integration, rain streaks and noise are per frame as before.
-// The images are bit-identical to the full render's (the cache off): a ray
-// that meets no moving object gets the same hit from either top level when
-// its whole packet does, and the moving objects cast no shadows, so nothing
-// else in a pixel's radiance depends on them. An eye whose centre is not
-// inside the static world's bounds (where that argument does not hold), or
-// that lies inside a moving object's sphere, renders every pixel that frame.
+// posed (RaycastScene::moving_object_bounds, the meshes' own extent widened
+// by 1 % + 1 cm; set_small_objects plays no part). The sub-pixel
+// integration, rain streaks and noise are per frame as before.
+// Exactness: the images (and CaptureRadiance) are bit-identical to the full
+// render's (the cache off). The moving objects cast no shadows, so only the
+// rays that meet them see them; a packet none of whose rays meets one gets
+// the same hits from the static-only top level as from the full one (see
+// IntersectManyStatic). A whole packet is re-cast because a ray's hit may
+// depend on the other rays of its packet. An eye whose centre is not inside
+// the static world's bounds (where that argument does not hold), or lies
+// inside a moving object's sphere, casts every pixel that frame.
 //
 // Determinism: Capture draws exactly one 64-bit value from `noise`; every
 // pixel's z is the counter-based normal (sim/core/counter_normal.h) of the
