@@ -15,7 +15,8 @@
 //
 // Distribution: exactly N(0, 1) up to the 2^-53 grid of the abscissa, in
 // double; the float outputs are those doubles rounded to nearest. Symmetric
-// about 0 (the sign is its own bit); |z| is unbounded (the tail is exact).
+// about 0 (the sign is its own bit); beyond r the tail is exact too, to the
+// 2^-53 grid of its uniforms (|z| < 12.3).
 //
 // Determinism: At(i), Fill(first, out, n)[j] == At(first + j) for every
 // block size and offset, on every thread count. The fast path (98.5% of
