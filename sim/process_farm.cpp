@@ -23,6 +23,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "sim/core/atomic_file.h"
 #include "sim/core/progress.h"
 #include "sim/run.h"
 
@@ -133,14 +134,6 @@ class ChildPool {
 
 void Nap() { std::this_thread::sleep_for(std::chrono::milliseconds(10)); }
 
-std::string ReadBytes(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  if (!in) throw std::runtime_error(p.string() + ": cannot read");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 // Boost.MPI messages:
 //   worker -> 0  kRequest  (nothing)        a free slot
 //   0 -> worker  kAssign   task index, or -1: no more tasks
@@ -164,7 +157,8 @@ TaskFiles ReadTree(const std::string& root) {
   TaskFiles files;
   for (const auto& e : fs::recursive_directory_iterator(root))
     if (e.is_regular_file())
-      files.emplace_back(fs::relative(e.path(), root).string(), ReadBytes(e.path()));
+      files.emplace_back(fs::relative(e.path(), root).string(),
+                         core::ReadFileBytes(e.path().string()));
   std::sort(files.begin(), files.end());
   return files;
 }

@@ -103,14 +103,6 @@ bool PointDone(const std::string& dir, const std::string& id) {
   return fs::is_regular_file(fs::path(PointDir(dir, id)) / "metrics.json", ec);
 }
 
-std::string ReadText(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  if (!in) throw std::runtime_error(p.string() + ": cannot read");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 // Creates DIR (and DIR/points) for `record`, or checks that an existing DIR
 // holds the same sweep.
 void PrepareDir(const std::string& dir, const Json& record) {
@@ -119,7 +111,7 @@ void PrepareDir(const std::string& dir, const Json& record) {
   if (fs::exists(file, ec)) {
     Json old;
     try {
-      old = Json::parse(ReadText(file));
+      old = Json::parse(core::ReadFileBytes(file.string()));
     } catch (const Json::exception&) {
       throw core::UsageError(file.string() + ": unreadable; remove " + dir +
                              " or choose another --out");
@@ -227,7 +219,7 @@ SweepOutcome MergeSweep(const std::string& dir) {
     throw core::UsageError(dir + ": not a sweep folder (no sweep.json)");
   Json record;
   try {
-    record = Json::parse(ReadText(file));
+    record = Json::parse(core::ReadFileBytes(file.string()));
   } catch (const Json::exception& e) {
     throw core::UsageError(file.string() + ": unreadable: " + e.what());
   }
@@ -252,7 +244,7 @@ SweepOutcome MergeSweep(const std::string& dir) {
     p.metrics = core::LoadJsonFile((run / "metrics.json").string());
     std::error_code e2;
     if (fs::is_regular_file(run / "rate_snr.csv", e2))
-      p.rate_snr_csv = ReadText(run / "rate_snr.csv");
+      p.rate_snr_csv = core::ReadFileBytes((run / "rate_snr.csv").string());
   }
   out.already_done = out.points;
   out.warnings = results::WriteSweepReport(dir, in);

@@ -20,4 +20,8 @@ void WriteFileAtomic(const std::string& path, const std::string& content);
 void WriteViaTemporary(const std::string& path,
                        const std::function<void(const std::string&)>& write);
 
+// The whole content of the file at `path`, as bytes. Throws
+// std::runtime_error "<path>: cannot read" if it cannot be opened.
+std::string ReadFileBytes(const std::string& path);
+
 }  // namespace uavsim::core
