@@ -40,7 +40,38 @@ core::SimTime EdgeReceiver::DeadlineNs(core::SimTime t_capture_ns) const {
   return (t_capture_ns / window_ns_ + 1) * window_ns_ + allowance_ns_;
 }
 
-void EdgeReceiver::OnSent(const Message& message) { ++counts_[Index(message.modality)].sent; }
+const char* FateName(Fate f) {
+  switch (f) {
+    case Fate::kDelivered:
+      return "delivered";
+    case Fate::kLate:
+      return "late";
+    case Fate::kLost:
+      return "lost";
+    default:
+      return "in_flight";
+  }
+}
+
+void EdgeReceiver::OnSent(const Message& message) {
+  ++counts_[Index(message.modality)].sent;
+  in_flight_[{message.node, message.sequence}] = log_.size();
+  MessageRecord r;
+  r.node = message.node;
+  r.modality = message.modality;
+  r.sequence = message.sequence;
+  r.t_capture_ns = message.t_capture_ns;
+  r.payload_bytes = message.payload_bytes;
+  log_.push_back(r);
+}
+
+MessageRecord* EdgeReceiver::Resolve(const Message& message) {
+  const auto it = in_flight_.find({message.node, message.sequence});
+  if (it == in_flight_.end()) return nullptr;
+  MessageRecord* r = &log_[it->second];
+  in_flight_.erase(it);
+  return r;
+}
 
 bool EdgeReceiver::OnArrival(const Message& message, core::SimTime t_arrival_ns) {
   ReceptionCounts& c = counts_[Index(message.modality)];
@@ -50,6 +81,10 @@ bool EdgeReceiver::OnArrival(const Message& message, core::SimTime t_arrival_ns)
   latencies_ns_[Index(message.modality)].push_back(t_arrival_ns - message.t_capture_ns);
   const bool late = IsLate(message.t_capture_ns, t_arrival_ns);
   ++(late ? c.late : c.delivered);
+  if (MessageRecord* r = Resolve(message)) {
+    r->fate = late ? Fate::kLate : Fate::kDelivered;
+    r->t_arrival_ns = t_arrival_ns;
+  }
   return !late;
 }
 
@@ -59,6 +94,7 @@ void EdgeReceiver::OnLost(const Message& message) {
     throw std::logic_error(std::string("EdgeReceiver: a ") + ModalityName(message.modality) +
                            " message was lost that was not reported sent");
   ++c.lost;
+  if (MessageRecord* r = Resolve(message)) r->fate = Fate::kLost;
 }
 
 LatencySummary EdgeReceiver::Latency(Modality m) const {

@@ -18,11 +18,16 @@
 // mean, and the percentiles p50, p95, p99 by linear interpolation between
 // order statistics (Percentile below).
 //
+// The log keeps every message's fate in the order messages were sent (the
+// run's packets.csv).
+//
 // Determinism: pure bookkeeping, no randomness. Not thread-safe.
 #pragma once
 
 #include <array>
 #include <cstdint>
+#include <map>
+#include <utility>
 #include <vector>
 
 #include "channel/packet.h"
@@ -46,6 +51,20 @@ struct LatencySummary {
   double p95_s = 0.0;
   double p99_s = 0.0;
   double max_s = 0.0;
+};
+
+// What became of one message.
+enum class Fate { kInFlight, kDelivered, kLate, kLost };
+const char* FateName(Fate f);  // "in_flight", "delivered", "late", "lost"
+
+struct MessageRecord {
+  std::uint32_t node = 0;  // the sender's index in the scenario's node list
+  Modality modality = Modality::kCamera;
+  std::uint64_t sequence = 0;
+  core::SimTime t_capture_ns = 0;
+  std::uint32_t payload_bytes = 0;
+  Fate fate = Fate::kInFlight;
+  core::SimTime t_arrival_ns = -1;  // delivered or late; -1 otherwise
 };
 
 // The q-quantile (q in [0, 1]) of `values` by linear interpolation between
@@ -77,6 +96,8 @@ class EdgeReceiver {
   }
 
   const ReceptionCounts& Counts(Modality m) const { return counts_[Index(m)]; }
+  // Every message reported sent, in that order, with its fate so far.
+  const std::vector<MessageRecord>& log() const { return log_; }
   LatencySummary Latency(Modality m) const;
 
   // Merges into `modalities` (an object keyed "camera", "lidar", "radar", as
@@ -94,6 +115,11 @@ class EdgeReceiver {
   core::SimTime allowance_ns_;
   std::array<ReceptionCounts, kModalityCount> counts_{};
   std::array<std::vector<core::SimTime>, kModalityCount> latencies_ns_;
+  std::vector<MessageRecord> log_;
+  // (node, sequence) -> index in log_ of the messages still in flight.
+  std::map<std::pair<std::uint32_t, std::uint64_t>, std::size_t> in_flight_;
+  // The log entry of a message in flight (removed from in_flight_), or null.
+  MessageRecord* Resolve(const Message& message);
 };
 
 }  // namespace uavsim::channel

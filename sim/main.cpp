@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "results/run_report.h"
 #include "sim/bench_beam.h"
 #include "sim/bench_events.h"
 #include "sim/bench_link.h"
@@ -52,6 +53,7 @@ const char* kMainHelp =
     "  run SCENARIO.json          run a scenario and write its run directory\n"
     "  sweep SPEC.json            run a grid of scenarios (packet loss x weather x seeds)\n"
     "  train SCENARIO.json        train the UAVLoc model by simulation\n"
+    "  report DIR                 redraw a run's or a sweep's report.html from its files\n"
     "  bench [raycast|radar|events|link|beam|pipeline|noise|all]   measure the hot paths\n"
     "\n"
     "options: --help (also after a command), --version, --quiet (every command)\n"
@@ -74,8 +76,10 @@ const char* kRunHelp =
     "                               [--set /json/pointer=value]... [--force] [--quiet]\n"
     "\n"
     "Runs the scenario and writes DIR (default runs/NAME-sSEED): manifest.json, truth.csv,\n"
-    "estimates.csv, metrics.json (RMSE per method, packets, data rates), rate_snr.csv/.png\n"
-    "and recorded frames. The directory appears only when the run is complete. The\n"
+    "estimates.csv, metrics.json (RMSE per method, packets, data rates), packets.csv,\n"
+    "rate_snr.csv/.png, world_top.csv and layout.csv (the map), report.html (figures and\n"
+    "tables: open it in a browser) with report/, and recorded frames. The directory\n"
+    "appears only when the run is complete. The\n"
     "`uavloc` method uses the model /pipeline/model names (\"default\": the one shipped\n"
     "for scenarios/default.json; `uavsim train` makes others).\n"
     "\n"
@@ -86,6 +90,19 @@ const char* kRunHelp =
     "  --set P=V       override the value at JSON pointer P\n"
     "  --force         replace DIR if it exists\n"
     "  --quiet         no progress or summary output\n";
+
+const char* kReportHelp =
+    "usage: uavsim report DIR [--quiet]\n"
+    "\n"
+    "Redraws the report of a run directory (report.html, report/, rate_snr.png) or of a\n"
+    "finished sweep folder (summary.csv, aggregate.csv, plots/, report.html) from the\n"
+    "files already there, without simulating anything: after a change of style, or for a\n"
+    "directory made by an older uavsim (figures whose input file it lacks say so).\n"
+    "Open DIR/report.html in a browser; it needs no network access.\n"
+    "\n"
+    "  --quiet   print nothing on success (warnings about figures not drawn still go to\n"
+    "            stderr)\n"
+    "exit codes: 0 written, 2 DIR is neither a run directory nor a finished sweep\n";
 
 const char* kSweepHelp =
     "usage: uavsim sweep SPEC.json [--out DIR] [--jobs N] [--shard I/N] [--quiet]\n"
@@ -500,6 +517,35 @@ int Sweep(int argc, char** argv) {
   return kExitOk;
 }
 
+int Report(int argc, char** argv) {
+  const ParsedArgs a = Parse("report", argc, argv, 2, {}, {"--quiet", "--help"});
+  if (a.Has("--help")) return std::cout << kReportHelp, kExitOk;
+  if (a.positional.size() != 1)
+    throw UsageError(
+        "uavsim report: expected one run directory or sweep folder (see uavsim report --help)");
+  const std::string dir = a.positional[0];
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  std::vector<std::string> warnings;
+  if (fs::is_regular_file(fs::path(dir) / "sweep.json", ec)) {
+    warnings = uavsim::sim::MergeSweep(dir).warnings;
+  } else if (fs::is_regular_file(fs::path(dir) / "metrics.json", ec) &&
+             fs::is_regular_file(fs::path(dir) / "manifest.json", ec)) {
+    try {
+      warnings = uavsim::results::WriteRunReport(dir);
+    } catch (const std::invalid_argument& e) {
+      throw UsageError(std::string("uavsim report: ") + e.what());
+    }
+  } else {
+    throw UsageError("uavsim report: " + dir +
+                     ": neither a run directory (no metrics.json and manifest.json) nor a sweep "
+                     "folder (no sweep.json)");
+  }
+  for (const std::string& w : warnings) std::cerr << "uavsim: warning: " << w << "\n";
+  if (!a.Has("--quiet")) std::printf("%s/report.html written\n", dir.c_str());
+  return kExitOk;
+}
+
 int Bench(int argc, char** argv) {
   const ParsedArgs a = Parse("bench", argc, argv, 2, {}, {"--quiet", "--help"});
   if (a.Has("--help")) return std::cout << kBenchHelp, kExitOk;
@@ -548,6 +594,7 @@ int Main(int argc, char** argv) {
   if (cmd == "bench") return Bench(argc, argv);
   if (cmd == "sweep") return Sweep(argc, argv);
   if (cmd == "train") return Train(argc, argv);
+  if (cmd == "report") return Report(argc, argv);
   throw UsageError("uavsim: unknown command '" + cmd + "' (see uavsim --help)");
 }
 

@@ -242,7 +242,7 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
   const auto traffic = TrafficByModality(nodes);
   if (o.collect)
     return Summarize(s, traffic, nullptr, truth.table().rows(), wall_since_start(), profile);
-  FinishedRun run{s, o, {}, started_utc, truth.table(), *scores, edge, traffic};
+  FinishedRun run{s, o, {}, started_utc, truth.table(), *scores, edge, world, traffic};
   {
     const auto timing = core::WallProfile::Measure(&profile, "write");
     recorder->Finish();

@@ -1,26 +1,14 @@
 #include "sim/run_writer.h"
 
+#include <filesystem>
 #include <iostream>
 
-#include "results/plot.h"
+#include "results/run_report.h"
+#include "sim/run_map.h"
 #include "sim/version.h"
 
 namespace uavsim::sim {
 namespace {
-
-void PlotRateSnr(results::RunDirectory& dir, const FinishedRun& run) {
-  results::PlotSpec plot;
-  plot.title = "Achievable rate vs SNR (" + run.scenario.name + ")";
-  plot.x_label = "SNR (dB)";
-  plot.y_label = "Rate (bit/s/Hz)";
-  plot.x_column = "snr_db";
-  plot.y_column = "rate_bps_hz";
-  plot.group_column = "beam";
-  plot.png_path = dir.StagingPath("rate_snr.png");
-  if (const std::string err = results::PlotCsv(dir.StagingPath("rate_snr.csv"), plot);
-      !err.empty() && !run.options.quiet)
-    std::cerr << "uavsim: warning: rate_snr.png not drawn: " << err << "\n";
-}
 
 // metrics.json: RMSE per method, reception per modality, data rates.
 core::Json Metrics(const FinishedRun& run) {
@@ -65,6 +53,25 @@ core::Json Metrics(const FinishedRun& run) {
   return metrics;
 }
 
+results::CsvTable PacketsTable(const FinishedRun& run) {
+  results::CsvTable t({"t_capture_s", "node", "modality", "sequence", "bytes", "window", "status",
+                       "t_arrival_s", "latency_s"});
+  const core::SimTime window_ns = core::Seconds(run.scenario.pipeline.window_s);
+  for (const channel::MessageRecord& m : run.edge.receiver().log()) {
+    const bool arrived = m.t_arrival_ns >= 0;
+    t.AddRow(
+        {results::FormatFixed(core::ToSeconds(m.t_capture_ns), 6),
+         m.node < run.scenario.nodes.size() ? run.scenario.nodes[m.node].id
+                                            : std::to_string(m.node),
+         core::ModalityName(m.modality), std::to_string(m.sequence),
+         std::to_string(m.payload_bytes), std::to_string(m.t_capture_ns / window_ns),
+         channel::FateName(m.fate),
+         arrived ? results::FormatFixed(core::ToSeconds(m.t_arrival_ns), 6) : "",
+         arrived ? results::FormatFixed(core::ToSeconds(m.t_arrival_ns - m.t_capture_ns), 6) : ""});
+  }
+  return t;
+}
+
 core::Json Manifest(const FinishedRun& run) {
   core::Json manifest = core::Json::object();
   manifest["uavsim_version"] = Version();
@@ -82,13 +89,18 @@ core::Json Manifest(const FinishedRun& run) {
 void WriteRunTables(results::RunDirectory& dir, const FinishedRun& run) {
   dir.WriteText("truth.csv", run.truth.str());
   dir.WriteText("estimates.csv", run.scores.estimates().str());
+  dir.WriteText("packets.csv", PacketsTable(run).str());
+  dir.WriteText("world_top.csv", WorldTopTable(run.scenario, run.world).str());
+  dir.WriteText("layout.csv", LayoutTable(run.scenario, run.world).str());
   dir.WriteText("rate_snr.csv", run.scores.downlink().rates().Csv());
-  PlotRateSnr(dir, run);
 }
 
 void WriteRunMetrics(results::RunDirectory& dir, const FinishedRun& run) {
   dir.WriteJson("metrics.json", Metrics(run));
   dir.WriteJson("manifest.json", Manifest(run));
+  const std::string staging = std::filesystem::path(dir.StagingPath("report.html")).parent_path();
+  for (const std::string& warning : results::WriteRunReport(staging))
+    if (!run.options.quiet) std::cerr << "uavsim: warning: report: " << warning << "\n";
   dir.Commit();
 }
 

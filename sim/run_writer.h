@@ -26,15 +26,24 @@ struct FinishedRun {
   const results::CsvTable& truth;
   const WindowScorer& scores;
   const EdgeServer& edge;
+  const WorldModel& world;
   std::map<std::string, NodeTraffic> traffic;  // per modality: camera, lidar, radar
 };
 
 // Writes the run's tables into `dir`'s staging folder: truth.csv,
-// estimates.csv, rate_snr.csv and its plot (warns on stderr, unless quiet,
-// when gnuplot cannot draw rate_snr.png).
+// estimates.csv, packets.csv, world_top.csv and layout.csv (sim/run_map.h),
+// rate_snr.csv.
+//
+// packets.csv: a row per message a node sent, in the order sent:
+//   t_capture_s,node,modality,sequence,bytes,window,status,t_arrival_s,latency_s
+// window = floor(t_capture / window_s) (the alignment window it belongs to),
+// status delivered (on time), late, lost or in_flight (still on the link at
+// the end); t_arrival_s and latency_s empty unless it arrived.
 void WriteRunTables(results::RunDirectory& dir, const FinishedRun& run);
-// Then metrics.json (with the summary's wall times) and manifest.json, and
-// commits the directory. Both throw std::runtime_error for I/O.
+// Then metrics.json (with the summary's wall times) and manifest.json, the
+// report (results/run_report.h: report.html, report/ and rate_snr.png;
+// warns on stderr, unless quiet, for each figure gnuplot could not draw),
+// and commits the directory. Both throw std::runtime_error for I/O.
 void WriteRunMetrics(results::RunDirectory& dir, const FinishedRun& run);
 
 }  // namespace uavsim::sim

@@ -27,6 +27,7 @@ class WorldModel : public channel::PathOracle {
   explicit WorldModel(const Scenario& scenario);
 
   sensors::RaycastScene& scene() { return *scene_; }
+  const sensors::RaycastScene& scene() const { return *scene_; }
   const core::WorldGeometry& geometry() const { return geometry_; }
   // The target: uavs[0].
   const core::Trajectory& target() const { return *uav_trajectories_.front(); }

@@ -8,6 +8,7 @@
 #include <catch2/catch.hpp>
 #include <chrono>
 #include <filesystem>
+#include <regex>
 #include <sstream>
 #include <thread>
 #include <tuple>
@@ -41,7 +42,7 @@ TEST_CASE("CLI: --version, --help and every subcommand's --help", "[sim]") {
   auto v = RunCli({"--version"});
   CHECK(v.exit_code == 0);
   CHECK_THAT(v.out, Catch::StartsWith("uavsim 0.1.0"));
-  for (const char* cmd : {"validate", "run", "sweep", "train", "bench"}) {
+  for (const char* cmd : {"validate", "run", "sweep", "train", "bench", "report"}) {
     INFO(cmd);
     auto r = RunCli({cmd, "--help"});
     CHECK(r.exit_code == 0);
@@ -98,9 +99,32 @@ TEST_CASE("CLI: run writes the run directory of DESIGN.md", "[sim]") {
   REQUIRE(r.exit_code == 0);
   CHECK(r.out.empty());
   CHECK(r.err.empty());
-  for (const char* f :
-       {"manifest.json", "truth.csv", "metrics.json", "estimates.csv", "rate_snr.csv"})
+  for (const char* f : {"manifest.json", "truth.csv", "metrics.json", "estimates.csv",
+                        "rate_snr.csv", "packets.csv", "world_top.csv", "layout.csv", "report.html",
+                        "report/errors.csv", "report/windows.csv"})
     CHECK(fs::exists(out + "/" + f));
+  // packets.csv: a row per message, as many as metrics.json counts sent.
+  const std::string packets = ReadFile(out + "/packets.csv");
+  CHECK_THAT(packets, Catch::StartsWith("t_capture_s,node,modality,sequence,bytes,window,status,"
+                                        "t_arrival_s,latency_s\n0.000000,cam1,camera,0,"));
+  CHECK(CountLines(packets) == 1 + 90 + 30 + 45);
+  // The report references only files that exist, and its PNGs are drawn.
+  {
+    const std::string html = ReadFile(out + "/report.html");
+    const std::regex ref("(?:src|href)=\"([^\"]*)\"");
+    std::size_t images = 0;
+    for (auto it = std::sregex_iterator(html.begin(), html.end(), ref);
+         it != std::sregex_iterator(); ++it) {
+      const std::string f = (*it)[1].str();
+      INFO(f);
+      CHECK(fs::is_regular_file(out + "/" + f));
+      if (f.size() > 4 && f.substr(f.size() - 4) == ".png") {
+        ++images;
+        CHECK(fs::file_size(out + "/" + f) > 1000);
+      }
+    }
+    CHECK(images == 5);  // top view, error vs time, packets, latency, rate vs SNR
+  }
 
   const std::string truth = ReadFile(out + "/truth.csv");
   CHECK_THAT(truth, Catch::StartsWith("t_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps\n0.000000,"));
@@ -172,6 +196,28 @@ TEST_CASE("CLI: run writes the run directory of DESIGN.md", "[sim]") {
   CHECK(manifest["scenario"]["pipeline"]["methods"] == Json::array({"uavloc", "ekf"}));
   CHECK(manifest["scenario"]["links"]["default"]["mtu_bytes"] == 1500);
 
+  // `uavsim report` redraws the report from the files alone: the same bytes
+  // (but for the wall times the page shows).
+  {
+    const std::string top = ReadFile(out + "/report/top_view.png");
+    const std::string windows = ReadFile(out + "/report/windows.csv");
+    fs::remove_all(out + "/report");
+    fs::remove(out + "/report.html");
+    fs::remove(out + "/rate_snr.png");
+    const auto redraw = RunCli({"report", out, "--quiet"});
+    INFO(redraw.err);
+    CHECK(redraw.exit_code == 0);
+    CHECK(redraw.err.empty());
+    CHECK(fs::exists(out + "/report.html"));
+    CHECK(fs::exists(out + "/rate_snr.png"));
+    CHECK(ReadFile(out + "/report/top_view.png") == top);
+    CHECK(ReadFile(out + "/report/windows.csv") == windows);
+    const auto not_a_run = RunCli({"report", out + "/report"});
+    CHECK(not_a_run.exit_code == 2);
+    CHECK_THAT(not_a_run.err, Catch::Contains("neither a run directory"));
+    CHECK(CountLines(not_a_run.err) == 1);
+  }
+
   // Refuses to overwrite; --force replaces.
   auto again = RunCli({"run", kDefault, "--out", out, "--quiet"});
   CHECK(again.exit_code == 2);
@@ -204,7 +250,9 @@ TEST_CASE("CLI: the same scenario and seed give byte-identical files, another se
     return dir + "/" + name;
   };
   const std::string a = run("a", "7"), b = run("b", "7"), c = run("c", "8");
-  for (const char* f : {"truth.csv", "estimates.csv", "rate_snr.csv"}) {
+  for (const char* f : {"truth.csv", "estimates.csv", "rate_snr.csv", "packets.csv",
+                        "world_top.csv", "layout.csv", "rate_snr.png", "report/errors.csv",
+                        "report/windows.csv", "report/top_view.png", "report/error_time.png"}) {
     INFO(f);
     CHECK(ReadFile(a + "/" + f) == ReadFile(b + "/" + f));
   }
@@ -257,6 +305,8 @@ TEST_CASE("CLI: execution settings change no output byte: static cache, parallel
         a["scenario"].erase("execution");
         b["scenario"].erase("execution");
         CHECK(a == b);
+      } else if (f == "report.html") {
+        // Shows the wall times (metrics.json's profile_s): not compared.
       } else {
         CHECK(ReadFile(out + "/" + f) == ReadFile(serial + "/" + f));
       }

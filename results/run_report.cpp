@@ -1,0 +1,922 @@
+// The run report: read the run's files, derive small tables under report/,
+// draw them with gnuplot, and lay everything out in report.html.
+#include "results/run_report.h"
+
+#include <Eigen/Core>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "results/csv.h"
+#include "results/gnuplot.h"
+#include "results/html.h"
+#include "sim/core/atomic_file.h"
+#include "sim/core/json_io.h"
+
+namespace uavsim::results {
+namespace {
+
+namespace fs = std::filesystem;
+using core::Json;
+
+// ---------------------------------------------------------------------------
+// Reading the run's CSVs
+
+// A CSV file as text cells; columns found by name.
+struct Table {
+  std::string name;  // for messages
+  std::vector<std::string> header;
+  std::vector<std::vector<std::string>> rows;
+
+  long Column(const std::string& column) const {
+    for (std::size_t i = 0; i < header.size(); ++i)
+      if (header[i] == column) return static_cast<long>(i);
+    throw std::invalid_argument(name + ": no column \"" + column + "\"");
+  }
+  double Number(std::size_t row, long column) const {
+    double x = 0.0;
+    if (!ParseFiniteNumber(rows[row][static_cast<std::size_t>(column)], &x))
+      throw std::invalid_argument(name + ": line " + std::to_string(row + 2) + ": \"" +
+                                  header[static_cast<std::size_t>(column)] +
+                                  "\" is not a finite number");
+    return x;
+  }
+};
+
+// The table in `dir`/`file`, or nothing if there is no such file.
+std::optional<Table> ReadTable(const fs::path& dir, const std::string& file) {
+  const fs::path path = dir / file;
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) return std::nullopt;
+  std::istringstream in(core::ReadFileBytes(path.string()));
+  Table t;
+  t.name = path.string();
+  std::string line;
+  if (!std::getline(in, line)) throw std::invalid_argument(t.name + ": empty file");
+  t.header = SplitCsvLine(line);
+  while (std::getline(in, line)) {
+    if (line.empty()) continue;
+    t.rows.push_back(SplitCsvLine(line));
+    if (t.rows.back().size() != t.header.size())
+      throw std::invalid_argument(t.name + ": line " + std::to_string(t.rows.size() + 1) + " has " +
+                                  std::to_string(t.rows.back().size()) + " cells, the header " +
+                                  std::to_string(t.header.size()));
+  }
+  return t;
+}
+
+// ---------------------------------------------------------------------------
+// Small helpers
+
+std::string Fixed(double x, int decimals) { return FormatFixed(x, decimals); }
+
+// A JSON number as text with `decimals`, "-" for null or absent.
+std::string JsonFixed(const Json& j, const std::string& key, int decimals) {
+  if (!j.is_object() || !j.contains(key) || !j.at(key).is_number()) return "-";
+  return Fixed(j.at(key).get<double>(), decimals);
+}
+
+std::string JsonText(const Json& j) {
+  if (j.is_string()) return j.get<std::string>();
+  if (j.is_null()) return "none";
+  if (j.is_number_float()) return core::FormatNumber(j.get<double>());
+  return j.dump();
+}
+
+// The value at `pointer` in `j`, or null.
+Json At(const Json& j, const std::string& pointer) {
+  const Json::json_pointer p(pointer);
+  return j.contains(p) ? j.at(p) : Json(nullptr);
+}
+
+// Order statistic interpolation (as channel/edge_receiver.h's Percentile).
+double Quantile(std::vector<double> v, double q) {
+  std::sort(v.begin(), v.end());
+  const double h = (static_cast<double>(v.size()) - 1.0) * q;
+  const auto lo = static_cast<std::size_t>(std::floor(h));
+  const std::size_t hi = std::min(lo + 1, v.size() - 1);
+  return v[lo] + (h - static_cast<double>(lo)) * (v[hi] - v[lo]);
+}
+
+// A data block "$name << EOD ... EOD".
+std::string Block(const std::string& name, const std::string& rows) {
+  return "$" + name + " << EOD\n" + rows + "EOD\n";
+}
+
+constexpr const char* kModalities[] = {"camera", "lidar", "radar"};
+constexpr const char* kModalityColours[] = {"#1f77b4", "#2ca02c", "#d62728"};
+// Method colours, in the order methods first appear (then repeating).
+constexpr const char* kMethodColours[] = {"#e6550d", "#3182bd", "#31a354", "#756bb1",
+                                          "#de2d26", "#636363", "#8c6d31", "#e377c2"};
+
+// ---------------------------------------------------------------------------
+// The run's data, as read
+
+struct Estimate {
+  double t_s = 0.0;
+  Eigen::Vector3d p;
+};
+
+struct RunData {
+  fs::path dir;
+  Json manifest, metrics, scenario;
+  std::optional<Table> truth, estimates, packets, world_top, layout, rate_snr;
+  std::vector<std::string> methods;  // in order of first appearance
+  std::map<std::string, std::vector<Estimate>> estimated;
+  std::vector<double> truth_t;
+  std::vector<Eigen::Vector3d> truth_p;
+  double window_s = 0.2, duration_s = 0.0;
+};
+
+RunData Load(const std::string& dir) {
+  RunData d;
+  d.dir = dir;
+  for (const char* f : {"metrics.json", "manifest.json"}) {
+    std::error_code ec;
+    if (!fs::is_regular_file(d.dir / f, ec))
+      throw std::invalid_argument(dir + ": not a run directory (no " + f + ")");
+  }
+  try {
+    d.metrics = core::LoadJsonFile((d.dir / "metrics.json").string());
+    d.manifest = core::LoadJsonFile((d.dir / "manifest.json").string());
+  } catch (const std::exception& e) {
+    throw std::invalid_argument(e.what());
+  }
+  d.scenario = d.manifest.value("scenario", Json::object());
+  if (const Json w = At(d.scenario, "/pipeline/window_s"); w.is_number())
+    d.window_s = w.get<double>();
+  if (const Json t = At(d.scenario, "/duration_s"); t.is_number()) d.duration_s = t.get<double>();
+  if (!(d.window_s > 0)) throw std::invalid_argument(dir + "/manifest.json: window_s must be > 0");
+  d.truth = ReadTable(d.dir, "truth.csv");
+  d.estimates = ReadTable(d.dir, "estimates.csv");
+  d.packets = ReadTable(d.dir, "packets.csv");
+  d.world_top = ReadTable(d.dir, "world_top.csv");
+  d.layout = ReadTable(d.dir, "layout.csv");
+  d.rate_snr = ReadTable(d.dir, "rate_snr.csv");
+  if (d.truth) {
+    const long t = d.truth->Column("t_s"), x = d.truth->Column("x_m"), y = d.truth->Column("y_m"),
+               z = d.truth->Column("z_m");
+    for (std::size_t i = 0; i < d.truth->rows.size(); ++i) {
+      d.truth_t.push_back(d.truth->Number(i, t));
+      d.truth_p.emplace_back(d.truth->Number(i, x), d.truth->Number(i, y), d.truth->Number(i, z));
+      if (i > 0 && d.truth_t[i] <= d.truth_t[i - 1])
+        throw std::invalid_argument(d.truth->name + ": t_s must increase (line " +
+                                    std::to_string(i + 2) + ")");
+    }
+  }
+  if (d.estimates) {
+    const Table& e = *d.estimates;
+    const long t = e.Column("t_s"), m = e.Column("method"), x = e.Column("x_m"),
+               y = e.Column("y_m"), z = e.Column("z_m");
+    for (std::size_t i = 0; i < e.rows.size(); ++i) {
+      const std::string& method = e.rows[i][static_cast<std::size_t>(m)];
+      if (!d.estimated.count(method)) d.methods.push_back(method);
+      d.estimated[method].push_back(
+          {e.Number(i, t), Eigen::Vector3d(e.Number(i, x), e.Number(i, y), e.Number(i, z))});
+    }
+  }
+  // Methods that ran but never estimated still get a row in the tables.
+  if (const Json rmse = d.metrics.value("rmse_m", Json::object()); rmse.is_object())
+    for (const auto& [method, value] : rmse.items())
+      if (std::find(d.methods.begin(), d.methods.end(), method) == d.methods.end())
+        d.methods.push_back(method);
+  return d;
+}
+
+// The truth at t_s, linear between samples (clamped at the ends).
+std::optional<Eigen::Vector3d> TruthAt(const RunData& d, double t_s) {
+  if (d.truth_t.empty()) return std::nullopt;
+  const auto it = std::lower_bound(d.truth_t.begin(), d.truth_t.end(), t_s);
+  if (it == d.truth_t.begin()) return d.truth_p.front();
+  if (it == d.truth_t.end()) return d.truth_p.back();
+  const std::size_t i = static_cast<std::size_t>(it - d.truth_t.begin());
+  const double a = (t_s - d.truth_t[i - 1]) / (d.truth_t[i] - d.truth_t[i - 1]);
+  return (1.0 - a) * d.truth_p[i - 1] + a * d.truth_p[i];
+}
+
+std::string MethodColour(const RunData& d, const std::string& method) {
+  const auto it = std::find(d.methods.begin(), d.methods.end(), method);
+  const std::size_t i = static_cast<std::size_t>(it - d.methods.begin());
+  return kMethodColours[i % (sizeof kMethodColours / sizeof *kMethodColours)];
+}
+
+// ---------------------------------------------------------------------------
+// Derived tables
+
+struct Errors {
+  CsvTable csv{{"t_s", "method", "error_m", "east_m", "north_m", "up_m"}};
+  std::map<std::string, std::vector<std::pair<double, double>>> by_method;  // (t, |e|)
+};
+
+Errors ComputeErrors(const RunData& d) {
+  Errors out;
+  for (const std::string& method : d.methods) {
+    const auto it = d.estimated.find(method);
+    if (it == d.estimated.end()) continue;
+    for (const Estimate& e : it->second) {
+      const auto truth = TruthAt(d, e.t_s);
+      if (!truth) continue;
+      const Eigen::Vector3d err = e.p - *truth;
+      out.by_method[method].emplace_back(e.t_s, err.norm());
+      out.csv.AddRow({Fixed(e.t_s, 6), method, Fixed(err.norm(), 6), Fixed(err.x(), 6),
+                      Fixed(err.y(), 6), Fixed(err.z(), 6)});
+    }
+  }
+  return out;
+}
+
+struct Reception {
+  long delivered = 0, late = 0, lost = 0, in_flight = 0;
+  long sent() const { return delivered + late + lost + in_flight; }
+};
+
+const char* WindowState(const Reception& r) {
+  if (r.sent() == 0) return "none_sent";
+  if (r.delivered == r.sent()) return "on_time";
+  if (r.delivered > 0) return "partly";
+  if (r.late > 0) return "late";
+  return "lost";
+}
+
+struct Packets {
+  // [window][modality]
+  std::vector<std::map<std::string, Reception>> windows;
+  std::map<std::string, Reception> totals;
+  std::map<std::string, std::vector<double>> latency_ms;
+};
+
+Packets CountPackets(const RunData& d) {
+  Packets out;
+  const Table& t = *d.packets;
+  const long mc = t.Column("modality"), wc = t.Column("window"), sc = t.Column("status"),
+             lc = t.Column("latency_s");
+  long windows = static_cast<long>(std::llround(std::ceil(d.duration_s / d.window_s - 1e-9)));
+  for (std::size_t i = 0; i < t.rows.size(); ++i)
+    windows = std::max(windows, static_cast<long>(t.Number(i, wc)) + 1);
+  out.windows.resize(static_cast<std::size_t>(std::max(0L, windows)));
+  for (std::size_t i = 0; i < t.rows.size(); ++i) {
+    const std::string& modality = t.rows[i][static_cast<std::size_t>(mc)];
+    const double w = t.Number(i, wc);
+    if (w < 0)
+      throw std::invalid_argument(t.name + ": negative window on line " + std::to_string(i + 2));
+    const std::string& status = t.rows[i][static_cast<std::size_t>(sc)];
+    Reception& r = out.windows[static_cast<std::size_t>(w)][modality];
+    Reception& total = out.totals[modality];
+    if (status == "delivered")
+      ++r.delivered, ++total.delivered;
+    else if (status == "late")
+      ++r.late, ++total.late;
+    else if (status == "lost")
+      ++r.lost, ++total.lost;
+    else if (status == "in_flight")
+      ++r.in_flight, ++total.in_flight;
+    else
+      throw std::invalid_argument(t.name + ": line " + std::to_string(i + 2) +
+                                  ": unknown status \"" + status + "\"");
+    if (!t.rows[i][static_cast<std::size_t>(lc)].empty())
+      out.latency_ms[modality].push_back(1000.0 * t.Number(i, lc));
+  }
+  return out;
+}
+
+// The modalities to show: the three of the paper in order, then any other.
+std::vector<std::string> ModalityOrder(const Packets& p) {
+  std::vector<std::string> out(std::begin(kModalities), std::end(kModalities));
+  for (const auto& [m, r] : p.totals)
+    if (std::find(out.begin(), out.end(), m) == out.end()) out.push_back(m);
+  std::vector<std::string> present;
+  for (const auto& m : out)
+    if (p.totals.count(m)) present.push_back(m);
+  return present;
+}
+
+std::string ModalityColour(const std::string& m, std::size_t index) {
+  for (std::size_t i = 0; i < 3; ++i)
+    if (m == kModalities[i]) return kModalityColours[i];
+  return kMethodColours[index % (sizeof kMethodColours / sizeof *kMethodColours)];
+}
+
+// ---------------------------------------------------------------------------
+// Figures
+
+struct Figure {
+  std::string png;  // relative to the run directory
+  std::string caption;
+  std::string missing;  // why it is not drawn ("" = drawn)
+};
+
+// Draws `script` into dir/png; a failure becomes the figure's note and a
+// warning.
+Figure Draw(const RunData& d, const RunReportOptions& o, const std::string& png,
+            const std::string& caption, const std::string& script, int width, int height,
+            std::vector<std::string>* warnings) {
+  GnuplotImage image;
+  image.png_path = (d.dir / png).string();
+  image.width_px = width;
+  image.height_px = height;
+  image.gnuplot = o.gnuplot;
+  Figure f{png, caption, RunGnuplot(script, image)};
+  if (!f.missing.empty()) warnings->push_back(png + ": " + f.missing);
+  return f;
+}
+
+Figure NotDrawn(const std::string& png, const std::string& caption, const std::string& why,
+                std::vector<std::string>* warnings) {
+  warnings->push_back(png + ": " + why);
+  return {png, caption, why};
+}
+
+Figure TopView(const RunData& d, const RunReportOptions& o, std::vector<std::string>* warnings) {
+  const std::string png = "report/top_view.png";
+  const std::string caption =
+      "Top view: buildings shaded by height, trees green; each node with its horizontal field of "
+      "view (dashed: boresight azimuth +- half the field of view across the image or scan); the "
+      "base station; the true path (black) and every method's estimates (dots).";
+  if (!d.layout || !d.truth)
+    return NotDrawn(png, caption,
+                    "the run has no " + std::string(!d.layout ? "layout.csv" : "truth.csv") +
+                        " (made by an older uavsim)",
+                    warnings);
+  std::ostringstream gp;
+  // The plotted square: the cells of world_top.csv, the nodes and the path.
+  Eigen::Vector2d lo = Eigen::Vector2d::Zero();
+  if (!d.truth_p.empty()) lo = d.truth_p.front().head<2>();
+  Eigen::Vector2d hi = lo;
+  const auto add = [&](double x, double y) {
+    lo = lo.cwiseMin(Eigen::Vector2d(x, y));
+    hi = hi.cwiseMax(Eigen::Vector2d(x, y));
+  };
+  for (const auto& p : d.truth_p) add(p.x(), p.y());
+  const Table& layout = *d.layout;
+  const long oc = layout.Column("object"), kc = layout.Column("kind"), xc = layout.Column("x_m"),
+             yc = layout.Column("y_m");
+  for (std::size_t i = 0; i < layout.rows.size(); ++i)
+    if (layout.rows[i][static_cast<std::size_t>(kc)] != "fov")
+      add(layout.Number(i, xc), layout.Number(i, yc));
+  double cell = 1.0, max_height = 1.0;
+  std::string buildings, trees, poles;
+  if (d.world_top && !d.world_top->rows.empty()) {
+    const Table& w = *d.world_top;
+    const long wx = w.Column("x_m"), wy = w.Column("y_m"), wh = w.Column("height_m"),
+               ws = w.Column("surface");
+    std::set<double> xs;
+    for (std::size_t i = 0; i < w.rows.size() && xs.size() < 3; ++i) xs.insert(w.Number(i, wx));
+    if (xs.size() >= 2) cell = *std::next(xs.begin()) - *xs.begin();
+    for (std::size_t i = 0; i < w.rows.size(); ++i) {
+      const double x = w.Number(i, wx), y = w.Number(i, wy), h = w.Number(i, wh);
+      const std::string& s = w.rows[i][static_cast<std::size_t>(ws)];
+      const std::string row =
+          ShortestNumber(x) + " " + ShortestNumber(y) + " " + ShortestNumber(h) + "\n";
+      if (s == "foliage")
+        trees += row;
+      else if (s == "metal")
+        poles += row;
+      else
+        buildings += row, max_height = std::max(max_height, h);
+    }
+    // Cells lie on a grid: a smaller spacing among the first rows' xs.
+    std::vector<double> sorted;
+    for (std::size_t i = 0; i < std::min<std::size_t>(w.rows.size(), 400); ++i)
+      sorted.push_back(w.Number(i, wx));
+    std::sort(sorted.begin(), sorted.end());
+    for (std::size_t i = 1; i < sorted.size(); ++i)
+      if (sorted[i] - sorted[i - 1] > 1e-6) cell = std::min(cell, sorted[i] - sorted[i - 1]);
+  }
+  // The map's cells reach as far as the world_top.csv grid has anything.
+  if (d.world_top)
+    for (std::size_t i = 0; i < d.world_top->rows.size(); ++i)
+      add(d.world_top->Number(i, d.world_top->Column("x_m")),
+          d.world_top->Number(i, d.world_top->Column("y_m")));
+  const Eigen::Vector2d centre = 0.5 * (lo + hi);
+  const double half = 0.5 * (hi - lo).maxCoeff() + 3.0;
+  gp << "set size ratio -1\n"
+     << "set xrange [" << ShortestNumber(centre.x() - half) << ":"
+     << ShortestNumber(centre.x() + half) << "]\nset yrange [" << ShortestNumber(centre.y() - half)
+     << ":" << ShortestNumber(centre.y() + half) << "]\n"
+     << "set xlabel 'East x (m)'\nset ylabel 'North y (m)'\n"
+     << "set title " << GnuplotString("Top view: " + d.scenario.value("name", std::string("run")))
+     << "\n"
+     << "set key outside right top box opaque\n"
+     << "set grid front lc rgb '#bbbbbb'\n"
+     << "set palette defined (0 '#e6e6e6', 1 '#4d4d4d')\n"
+     << "set cbrange [0:" << ShortestNumber(max_height) << "]\n"
+     << "set cblabel 'Building height (m)'\n"
+     << "set colorbox vertical user origin screen 0.80, screen 0.12 size screen 0.02, screen 0.3\n"
+     << "set style fill solid 1.0 noborder\n";
+  std::string plots;
+  const auto add_plot = [&plots](const std::string& p) {
+    plots += (plots.empty() ? "plot " : ", \\\n     ") + p;
+  };
+  const std::string h = ShortestNumber(0.51 * cell);  // a hair wide: no seams between cells
+  if (!buildings.empty()) {
+    gp << Block("buildings", buildings);
+    add_plot("$buildings using 1:2:(" + h + "):(" + h + "):3 with boxxy fc palette notitle");
+  }
+  if (!trees.empty()) {
+    gp << Block("trees", trees);
+    add_plot("$trees using 1:2:(" + h + "):(" + h + ") with boxxy fc rgb '#74c476' title 'trees'");
+  }
+  if (!poles.empty()) {
+    gp << Block("poles", poles);
+    add_plot("$poles using 1:2:(" + h + "):(" + h + ") with boxxy fc rgb '#08306b' title 'poles'");
+  }
+  // Fields of view (one block per node, in layout order) and the nodes.
+  std::vector<std::string> fov_objects;
+  std::map<std::string, std::string> fov_rows, node_kind;
+  std::string base_station;
+  int label = 0;
+  for (std::size_t i = 0; i < layout.rows.size(); ++i) {
+    const std::string& object = layout.rows[i][static_cast<std::size_t>(oc)];
+    const std::string& kind = layout.rows[i][static_cast<std::size_t>(kc)];
+    const std::string xy =
+        ShortestNumber(layout.Number(i, xc)) + " " + ShortestNumber(layout.Number(i, yc));
+    if (kind == "fov") {
+      if (!fov_rows.count(object)) fov_objects.push_back(object);
+      fov_rows[object] += xy + "\n";
+    } else if (kind == "base_station") {
+      base_station += xy + "\n";
+    } else {
+      node_kind[object] = kind;
+      ++label;
+      gp << "uavsim_label" << label << " = " << GnuplotString(object) << "\n"
+         << "set label " << label << " uavsim_label" << label << " at "
+         << ShortestNumber(layout.Number(i, xc)) << "," << ShortestNumber(layout.Number(i, yc))
+         << " offset 1,-1 front font ',9'\n";
+    }
+  }
+  for (std::size_t k = 0; k < fov_objects.size(); ++k) {
+    const std::string& object = fov_objects[k];
+    const auto kind = node_kind.count(object) ? node_kind[object] : std::string();
+    std::size_t mi = 0;
+    while (mi < 3 && kind != kModalities[mi]) ++mi;
+    const std::string colour = mi < 3 ? kModalityColours[mi] : "#555555";
+    gp << Block("fov" + std::to_string(k), fov_rows[object]);
+    gp << "uavsim_fov" << k << " = " << GnuplotString(object + " field of view") << "\n";
+    add_plot("$fov" + std::to_string(k) + " using 1:2 with lines dt 2 lw 1.5 lc rgb '" + colour +
+             "' title uavsim_fov" + std::to_string(k));
+  }
+  // The true path, then each method's estimates.
+  std::string truth;
+  for (const auto& p : d.truth_p)
+    truth += ShortestNumber(p.x()) + " " + ShortestNumber(p.y()) + "\n";
+  gp << Block("truth", truth);
+  add_plot("$truth using 1:2 with lines lw 2 lc rgb 'black' title 'truth'");
+  std::size_t mk = 0;
+  for (const std::string& method : d.methods) {
+    const auto it = d.estimated.find(method);
+    if (it == d.estimated.end()) continue;
+    std::string rows;
+    for (const Estimate& e : it->second)
+      rows += ShortestNumber(e.p.x()) + " " + ShortestNumber(e.p.y()) + "\n";
+    gp << Block("est" + std::to_string(mk), rows) << "uavsim_method" << mk << " = "
+       << GnuplotString(method) << "\n";
+    add_plot("$est" + std::to_string(mk) + " using 1:2 with points pt 7 ps 0.6 lc rgb '" +
+             MethodColour(d, method) + "' title uavsim_method" + std::to_string(mk));
+    ++mk;
+  }
+  std::string nodes[3];
+  for (std::size_t i = 0; i < layout.rows.size(); ++i) {
+    const std::string& kind = layout.rows[i][static_cast<std::size_t>(kc)];
+    for (std::size_t m = 0; m < 3; ++m)
+      if (kind == kModalities[m])
+        nodes[m] += ShortestNumber(layout.Number(i, xc)) + " " +
+                    ShortestNumber(layout.Number(i, yc)) + "\n";
+  }
+  const char* node_points[] = {"5", "9", "13"};
+  for (std::size_t m = 0; m < 3; ++m) {
+    if (nodes[m].empty()) continue;
+    gp << Block(std::string("node_") + kModalities[m], nodes[m]);
+    add_plot(std::string("$node_") + kModalities[m] + " using 1:2 with points pt " +
+             node_points[m] + " ps 1.8 lc rgb '" + kModalityColours[m] + "' title '" +
+             kModalities[m] + " node'");
+  }
+  if (!base_station.empty()) {
+    gp << Block("bs", base_station);
+    add_plot("$bs using 1:2 with points pt 3 ps 2.2 lw 2 lc rgb '#6a3d9a' title 'base station'");
+  }
+  gp << plots << "\n";
+  return Draw(d, o, png, caption, gp.str(), 1000, 760, warnings);
+}
+
+Figure ErrorTime(const RunData& d, const Errors& errors, const std::optional<Packets>& packets,
+                 const RunReportOptions& o, std::vector<std::string>* warnings) {
+  const std::string png = "report/error_time.png";
+  const std::string caption =
+      "Top: each method's error (distance from the truth) at every window's end. Bottom: what the "
+      "edge had of each modality in each 0.2 s window: every frame on time, some on time, none "
+      "on time (late), none arrived (lost), nothing sent.";
+  std::ostringstream gp;
+  double lo = INFINITY, hi = 0.0;
+  for (const auto& [m, rows] : errors.by_method)
+    for (const auto& [t, e] : rows)
+      if (e > 0) lo = std::min(lo, e), hi = std::max(hi, e);
+  const bool log_y = hi > 0 && lo < INFINITY && hi / lo >= 20.0;  // spans decades
+  const double t_end = std::max(d.duration_s, d.truth_t.empty() ? 0.0 : d.truth_t.back());
+  gp << "set multiplot\n"
+     << "set lmargin at screen 0.08\nset rmargin at screen 0.80\n"
+     << "set xrange [0:" << ShortestNumber(t_end) << "]\n"
+     << "set tmargin at screen 0.93\nset bmargin at screen 0.40\n"
+     << "set title "
+     << GnuplotString("Localization error vs time: " + d.scenario.value("name", std::string("run")))
+     << "\nset ylabel 'Error (m)'\nset format x ''\nset grid\n"
+     << "set key outside right top\n"
+     << (log_y ? "set logscale y\n" : "set yrange [0:*]\n");
+  std::string plots;
+  std::size_t k = 0;
+  for (const std::string& method : d.methods) {
+    const auto it = errors.by_method.find(method);
+    if (it == errors.by_method.end()) continue;
+    std::string rows;
+    for (const auto& [t, e] : it->second)
+      if (!log_y || e > 0) rows += ShortestNumber(t) + " " + ShortestNumber(e) + "\n";
+    gp << Block("err" + std::to_string(k), rows) << "uavsim_method" << k << " = "
+       << GnuplotString(method) << "\n";
+    plots += (plots.empty() ? "plot " : ", ") + std::string("$err") + std::to_string(k) +
+             " using 1:2 with lines lw 1.5 lc rgb '" + MethodColour(d, method) +
+             "' title uavsim_method" + std::to_string(k);
+    ++k;
+  }
+  if (plots.empty())  // a run shorter than every method's warm-up
+    gp << "set yrange [0:1]\nset format y ''\nset label 1 'no method produced an estimate' at "
+          "graph 0.5, graph 0.5 center\nplot NaN notitle\nunset label 1\nset format y '%g'\n";
+  else
+    gp << plots << "\n";
+  // The strip: one row per modality, a box per window coloured by state.
+  gp << "unset logscale y\nunset title\nset format x '%g'\nset xlabel 'Simulated time (s)'\n"
+     << "set tmargin at screen 0.33\nset bmargin at screen 0.09\n"
+     << "unset grid\nset ylabel ''\nset key outside right center\n";
+  if (!packets) {
+    gp << "set yrange [0:1]\nunset ytics\nset label 1 'no packets.csv in this run' at graph 0.5, "
+          "graph 0.5 center\n"
+       << "plot NaN notitle\n";
+  } else {
+    const std::vector<std::string> order = ModalityOrder(*packets);
+    const std::size_t n = order.size();
+    gp << "set yrange [-0.6:" << ShortestNumber(static_cast<double>(n) - 0.4) << "]\nset ytics (";
+    for (std::size_t m = 0; m < n; ++m)
+      gp << (m ? ", " : "") << GnuplotString(order[m]) << " " << (n - 1 - m);
+    gp << ") nomirror\nset style fill solid 1.0 noborder\n";
+    const std::pair<const char*, const char*> states[] = {{"on_time", "#1a9641"},
+                                                          {"partly", "#a6d96a"},
+                                                          {"late", "#fdae61"},
+                                                          {"lost", "#d7191c"},
+                                                          {"none_sent", "#d9d9d9"}};
+    const char* titles[] = {"all on time", "some on time", "none on time (late)",
+                            "none arrived (lost)", "nothing sent"};
+    std::map<std::string, std::string> rows;
+    for (std::size_t w = 0; w < packets->windows.size(); ++w)
+      for (std::size_t m = 0; m < n; ++m) {
+        const auto it = packets->windows[w].find(order[m]);
+        const Reception r = it == packets->windows[w].end() ? Reception{} : it->second;
+        rows[WindowState(r)] += ShortestNumber((static_cast<double>(w) + 0.5) * d.window_s) + " " +
+                                std::to_string(n - 1 - m) + "\n";
+      }
+    std::string strip;
+    for (std::size_t s = 0; s < 5; ++s) {
+      const std::string name = states[s].first;
+      // Every state keeps its legend entry, drawn or not.
+      gp << Block("st_" + name, rows.count(name) ? rows[name] : std::string("NaN NaN\n"));
+      strip += (strip.empty() ? "plot " : ", ") + std::string("$st_") + name + " using 1:2:(" +
+               ShortestNumber(0.5 * d.window_s) + "):(0.38) with boxxy fc rgb '" +
+               states[s].second + "' title '" + titles[s] + "'";
+    }
+    gp << strip << "\n";
+  }
+  gp << "unset multiplot\n";
+  return Draw(d, o, png, caption, gp.str(), 1100, 620, warnings);
+}
+
+Figure PacketsFigure(const RunData& d, const Packets& p, const RunReportOptions& o,
+                     std::vector<std::string>* warnings) {
+  const std::string png = "report/packets.png";
+  const std::string caption =
+      "Messages per modality by fate: delivered by its window's deadline, late (arrived after it: "
+      "the pipeline treats it as missing), lost on the uplink, still in flight at the end.";
+  std::ostringstream gp;
+  std::string rows;
+  for (const std::string& m : ModalityOrder(p)) {
+    const Reception& r = p.totals.at(m);
+    rows += m + " " + std::to_string(r.delivered) + " " + std::to_string(r.late) + " " +
+            std::to_string(r.lost) + " " + std::to_string(r.in_flight) + "\n";
+  }
+  gp << Block("packets", rows) << "set title 'Uplink messages by fate'\nset ylabel 'Messages'\n"
+     << "set style data histograms\nset style histogram rowstacked\nset boxwidth 0.6\n"
+     << "set style fill solid 1.0 border -1\nset yrange [0:*]\nset grid ytics\n"
+     << "set key outside right top\n"
+     << "plot $packets using 2:xtic(1) lc rgb '#1a9641' title 'delivered', "
+     << "'' using 3 lc rgb '#fdae61' title 'late', '' using 4 lc rgb '#d7191c' title 'lost', "
+     << "'' using 5 lc rgb '#969696' title 'in flight'\n";
+  return Draw(d, o, png, caption, gp.str(), 640, 440, warnings);
+}
+
+Figure LatencyFigure(const RunData& d, const Packets& p, CsvTable* csv, const RunReportOptions& o,
+                     std::vector<std::string>* warnings) {
+  const std::string png = "report/latency.png";
+  const std::string caption =
+      "Latency (capture to arrival at the edge, on time or late) per modality, as the share of "
+      "arrivals within a latency.";
+  std::ostringstream gp;
+  std::string plots;
+  std::size_t k = 0;
+  const std::vector<std::string> order = ModalityOrder(p);
+  for (std::size_t m = 0; m < order.size(); ++m) {
+    const auto it = p.latency_ms.find(order[m]);
+    if (it == p.latency_ms.end() || it->second.empty()) continue;
+    std::vector<double> v = it->second;
+    std::sort(v.begin(), v.end());
+    std::string rows;
+    for (std::size_t i = 0; i < v.size(); ++i) {
+      const double f = static_cast<double>(i + 1) / static_cast<double>(v.size());
+      rows += ShortestNumber(v[i]) + " " + ShortestNumber(f) + "\n";
+      csv->AddRow({order[m], Fixed(v[i], 3), Fixed(f, 6)});
+    }
+    gp << Block("lat" + std::to_string(k), rows) << "uavsim_mod" << k << " = "
+       << GnuplotString(order[m]) << "\n";
+    plots += (plots.empty() ? "plot " : ", ") + std::string("$lat") + std::to_string(k) +
+             " using 1:2 with steps lw 2 lc rgb '" + ModalityColour(order[m], m) +
+             "' title uavsim_mod" + std::to_string(k);
+    ++k;
+  }
+  if (plots.empty()) return NotDrawn(png, caption, "no message arrived", warnings);
+  gp << "set title 'Uplink latency (empirical CDF)'\nset xlabel 'Latency (ms)'\n"
+     << "set ylabel 'Share of arrivals'\nset yrange [0:1.02]\nset grid\nset key right bottom\n"
+     << plots << "\n";
+  return Draw(d, o, png, caption, gp.str(), 640, 440, warnings);
+}
+
+Figure RateSnr(const RunData& d, const RunReportOptions& o, std::vector<std::string>* warnings) {
+  const std::string png = "rate_snr.png";
+  const std::string caption =
+      "Achievable downlink rate vs SNR with the base station's beam steered at the truth "
+      "(perfect) and at each method's estimate.";
+  if (!d.rate_snr) return NotDrawn(png, caption, "the run has no rate_snr.csv", warnings);
+  const Table& t = *d.rate_snr;
+  const long sc = t.Column("snr_db"), bc = t.Column("beam"), rc = t.Column("rate_bps_hz");
+  std::vector<std::string> beams;
+  std::map<std::string, std::string> rows;
+  for (std::size_t i = 0; i < t.rows.size(); ++i) {
+    const std::string& beam = t.rows[i][static_cast<std::size_t>(bc)];
+    if (!rows.count(beam)) beams.push_back(beam);
+    rows[beam] += ShortestNumber(t.Number(i, sc)) + " " + ShortestNumber(t.Number(i, rc)) + "\n";
+  }
+  if (beams.empty()) return NotDrawn(png, caption, "rate_snr.csv has no rows", warnings);
+  std::ostringstream gp;
+  std::string plots;
+  for (std::size_t k = 0; k < beams.size(); ++k) {
+    gp << Block("b" + std::to_string(k), rows[beams[k]]) << "uavsim_beam" << k << " = "
+       << GnuplotString(beams[k]) << "\n";
+    const bool method = std::find(d.methods.begin(), d.methods.end(), beams[k]) != d.methods.end();
+    const std::string colour = beams[k] == "perfect" ? "black"
+                               : method              ? MethodColour(d, beams[k])
+                                                     : "#777777";
+    plots += (plots.empty() ? "plot " : ", ") + std::string("$b") + std::to_string(k) +
+             " using 1:2 with linespoints pt 7 ps 0.6 lw 1.5 lc rgb '" + colour +
+             "' title uavsim_beam" + std::to_string(k);
+  }
+  gp << "set title "
+     << GnuplotString("Achievable rate vs SNR: " + d.scenario.value("name", std::string("run")))
+     << "\nset xlabel 'SNR (dB)'\nset ylabel 'Rate (bit/s/Hz)'\nset grid\nset key top left\n"
+     << plots << "\n";
+  return Draw(d, o, png, caption, gp.str(), 800, 560, warnings);
+}
+
+// ---------------------------------------------------------------------------
+// The page's tables
+
+std::vector<std::vector<std::string>> RmseRows(const RunData& d, const Errors& errors) {
+  std::vector<std::vector<std::string>> rows{{"method", "RMSE (m)", "windows estimated",
+                                              "RMSE on common windows (m)", "median error (m)",
+                                              "90th percentile (m)"}};
+  const Json rmse = d.metrics.value("rmse_m", Json::object());
+  const Json windows = d.metrics.value("estimated_windows", Json::object());
+  const Json common = d.metrics.value("rmse_common_m", Json::object());
+  for (const std::string& m : d.methods) {
+    std::vector<double> e;
+    if (const auto it = errors.by_method.find(m); it != errors.by_method.end())
+      for (const auto& [t, x] : it->second) e.push_back(x);
+    rows.push_back({m, JsonFixed(rmse, m, 3), windows.contains(m) ? JsonText(windows.at(m)) : "-",
+                    JsonFixed(common, m, 3), e.empty() ? "-" : Fixed(Quantile(e, 0.5), 3),
+                    e.empty() ? "-" : Fixed(Quantile(e, 0.9), 3)});
+  }
+  return rows;
+}
+
+std::vector<std::vector<std::string>> ReceptionRows(const RunData& d) {
+  std::vector<std::vector<std::string>> rows{{"modality", "frames", "sent", "delivered", "late",
+                                              "lost", "in flight", "latency mean (ms)", "p50 (ms)",
+                                              "p95 (ms)", "p99 (ms)"}};
+  const Json mods = d.metrics.value("modalities", Json::object());
+  for (const auto& [m, v] : mods.items()) {
+    const Json lat = v.value("latency_s", Json(nullptr));
+    const auto ms = [&lat](const char* key) {
+      return lat.is_object() && lat.contains(key) && lat.at(key).is_number()
+                 ? Fixed(1000.0 * lat.at(key).get<double>(), 2)
+                 : std::string("-");
+    };
+    const auto count = [&v](const char* key) {
+      return v.contains(key) ? JsonText(v.at(key)) : "-";
+    };
+    rows.push_back({m, count("frames"), count("packets_sent"), count("packets_delivered"),
+                    count("packets_late"), count("packets_lost"), count("packets_in_flight"),
+                    ms("mean"), ms("p50"), ms("p95"), ms("p99")});
+  }
+  return rows;
+}
+
+std::vector<std::vector<std::string>> DataRateRows(const RunData& d) {
+  std::vector<std::vector<std::string>> rows{
+      {"modality", "raw (kB/s)", "pre-processed (kB/s)", "compressed (kB/s)", "raw / compressed"}};
+  const Json rates = d.metrics.value("data_rate_kBps", Json::object());
+  for (const auto& [m, v] : rates.items()) {
+    const double raw = v.value("raw", 0.0), compressed = v.value("compressed", 0.0);
+    rows.push_back({m, JsonFixed(v, "raw", 1), JsonFixed(v, "preprocessed", 2),
+                    JsonFixed(v, "compressed", 3),
+                    compressed > 0 ? Fixed(raw / compressed, 0) + "x" : std::string("-")});
+  }
+  return rows;
+}
+
+std::vector<std::vector<std::string>> SettingsRows(const RunData& d) {
+  const Json& s = d.scenario;
+  std::vector<std::vector<std::string>> rows{{"setting", "value"}};
+  const auto add = [&rows](const std::string& name, const std::string& value) {
+    rows.push_back({name, value});
+  };
+  add("scenario file", JsonText(d.manifest.value("scenario_file", Json(nullptr))));
+  add("seed", JsonText(d.manifest.value("seed", Json(nullptr))));
+  add("duration (s)", JsonText(At(s, "/duration_s")));
+  add("city", JsonText(At(s, "/world/city/type")));
+  std::string weather = "rain " + JsonText(At(s, "/weather/rain_mm_h")) + " mm/h, fog visibility " +
+                        JsonText(At(s, "/weather/fog_visibility_m")) +
+                        (At(s, "/weather/fog_visibility_m").is_null() ? "" : " m") +
+                        ", illumination " + JsonText(At(s, "/weather/illumination"));
+  add("weather", weather);
+  add("birds", JsonText(At(s, "/distractors/birds")));
+  if (const Json uavs = At(s, "/uavs"); uavs.is_array())
+    for (std::size_t i = 0; i < uavs.size(); ++i)
+      add("UAV " + JsonText(uavs[i].value("id", Json(std::to_string(i)))),
+          "trajectory " + JsonText(At(uavs[i], "/trajectory/type")));
+  if (const Json nodes = At(s, "/nodes"); nodes.is_array())
+    for (const Json& n : nodes) {
+      const Json p = At(n, "/sensor/pose/position_m");
+      std::string where =
+          p.is_array() && p.size() == 3
+              ? " at (" + JsonText(p[0]) + ", " + JsonText(p[1]) + ", " + JsonText(p[2]) + ") m"
+              : "";
+      add("node " + JsonText(n.value("id", Json("?"))),
+          JsonText(At(n, "/sensor/type")) + ", " + JsonText(At(n, "/sensor/rate_hz")) + " Hz" +
+              where + ", uplink " + JsonText(n.value("uplink", Json("?"))));
+    }
+  if (const Json links = At(s, "/links"); links.is_object())
+    for (const auto& [name, l] : links.items()) {
+      std::string loss = JsonText(At(l, "/loss/type"));
+      if (At(l, "/loss/p").is_number()) loss += " p = " + JsonText(At(l, "/loss/p"));
+      add("link " + name, JsonText(At(l, "/bandwidth_mbps")) + " Mbit/s, latency " +
+                              JsonText(At(l, "/latency_ms")) + " ms, jitter " +
+                              JsonText(At(l, "/jitter/type")) + ", loss " + loss);
+    }
+  add("base station", "UPA " + JsonText(At(s, "/base_station/upa/mx")) + "x" +
+                          JsonText(At(s, "/base_station/upa/my")) + " at " +
+                          JsonText(At(s, "/base_station/carrier_ghz")) + " GHz, path model " +
+                          JsonText(At(s, "/base_station/path_model")));
+  std::string methods;
+  if (const Json m = At(s, "/pipeline/methods"); m.is_array())
+    for (const Json& x : m) methods += (methods.empty() ? "" : ", ") + JsonText(x);
+  add("methods", methods);
+  add("model", JsonText(At(s, "/pipeline/model")));
+  add("window (s)", JsonText(At(s, "/pipeline/window_s")));
+  add("uavsim", JsonText(d.manifest.value("uavsim_version", Json(nullptr))) + " (" +
+                    JsonText(d.manifest.value("git_hash", Json(nullptr))) + "), started " +
+                    JsonText(d.manifest.value("started_utc", Json(nullptr))));
+  return rows;
+}
+
+std::vector<std::vector<std::string>> ProfileRows(const RunData& d) {
+  std::vector<std::vector<std::string>> rows{{"part", "wall (s)", "share of the run's wall time"}};
+  const Json profile = d.metrics.value("profile_s", Json::object());
+  const double wall = d.metrics.value("wall_s", 0.0);
+  std::vector<std::pair<double, std::string>> parts;
+  for (const auto& [part, v] : profile.items())
+    if (v.is_number()) parts.emplace_back(v.get<double>(), part);
+  std::stable_sort(parts.begin(), parts.end(),
+                   [](const auto& a, const auto& b) { return a.first > b.first; });
+  for (const auto& [seconds, part] : parts)
+    rows.push_back(
+        {part, Fixed(seconds, 2), wall > 0 ? Fixed(100.0 * seconds / wall, 1) + " %" : "-"});
+  return rows;
+}
+
+void AddFigure(HtmlPage& page, const Figure& f) { page.Figure(f.png, f.caption, f.missing); }
+
+}  // namespace
+
+std::vector<std::string> WriteRunReport(const std::string& dir, const RunReportOptions& options) {
+  const RunData d = Load(dir);
+  std::vector<std::string> warnings;
+  const Errors errors = ComputeErrors(d);
+  std::optional<Packets> packets;
+  if (d.packets) packets = CountPackets(d);
+
+  const fs::path report = d.dir / "report";
+  std::error_code ec;
+  fs::create_directories(report, ec);
+  if (ec) throw std::runtime_error(report.string() + ": cannot create folder: " + ec.message());
+  core::WriteFileAtomic((report / "errors.csv").string(), errors.csv.str());
+
+  CsvTable latency_csv({"modality", "latency_ms", "fraction"});
+  std::vector<Figure> reception;
+  if (packets) {
+    CsvTable windows({"window", "t_start_s", "t_end_s", "modality", "sent", "delivered", "late",
+                      "lost", "in_flight", "state"});
+    CsvTable totals({"modality", "delivered", "late", "lost", "in_flight"});
+    const std::vector<std::string> order = ModalityOrder(*packets);
+    for (std::size_t w = 0; w < packets->windows.size(); ++w)
+      for (const std::string& m : order) {
+        const auto it = packets->windows[w].find(m);
+        const Reception r = it == packets->windows[w].end() ? Reception{} : it->second;
+        windows.AddRow({std::to_string(w), Fixed(static_cast<double>(w) * d.window_s, 6),
+                        Fixed(static_cast<double>(w + 1) * d.window_s, 6), m,
+                        std::to_string(r.sent()), std::to_string(r.delivered),
+                        std::to_string(r.late), std::to_string(r.lost), std::to_string(r.in_flight),
+                        WindowState(r)});
+      }
+    for (const std::string& m : order) {
+      const Reception& r = packets->totals.at(m);
+      totals.AddRow({m, std::to_string(r.delivered), std::to_string(r.late), std::to_string(r.lost),
+                     std::to_string(r.in_flight)});
+    }
+    core::WriteFileAtomic((report / "windows.csv").string(), windows.str());
+    core::WriteFileAtomic((report / "packets_by_fate.csv").string(), totals.str());
+    reception.push_back(PacketsFigure(d, *packets, options, &warnings));
+    reception.push_back(LatencyFigure(d, *packets, &latency_csv, options, &warnings));
+    core::WriteFileAtomic((report / "latency.csv").string(), latency_csv.str());
+  } else {
+    reception.push_back(NotDrawn("report/packets.png", "Messages per modality by fate.",
+                                 "the run has no packets.csv (made by an older uavsim)",
+                                 &warnings));
+  }
+  const Figure top = TopView(d, options, &warnings);
+  const Figure error_time = ErrorTime(d, errors, packets, options, &warnings);
+  const Figure rate = RateSnr(d, options, &warnings);
+
+  const std::string name = d.scenario.value("name", std::string("run"));
+  HtmlPage page("uavsim run: " + name);
+  const Json rmse = d.metrics.value("rmse_m", Json::object());
+  std::string headline = "Simulated " + JsonFixed(d.metrics, "sim_s", 1) + " s in " +
+                         JsonFixed(d.metrics, "wall_s", 1) + " s of wall time (" +
+                         JsonFixed(d.metrics, "realtime_factor", 2) + "x real time); " +
+                         JsonText(d.metrics.value("windows", Json(nullptr))) +
+                         " alignment windows of " + ShortestNumber(d.window_s) + " s.";
+  page.Paragraph(headline);
+  page.Heading("Localization");
+  page.Table(RmseRows(d, errors));
+  page.Paragraph(
+      "RMSE over the windows each method estimated; the common windows are those every method "
+      "estimated (methods start at different windows). Median and 90th percentile of the same "
+      "errors (report/errors.csv).");
+  AddFigure(page, top);
+  AddFigure(page, error_time);
+  page.Heading("Uplink: what reached the edge");
+  page.Table(ReceptionRows(d));
+  page.BeginRow();
+  for (const Figure& f : reception) AddFigure(page, f);
+  page.EndRow();
+  page.Heading("Data rates (as the paper's Table II)");
+  page.Table(DataRateRows(d));
+  page.Paragraph(
+      "Raw: the sensor's frames; pre-processed: what the node's pre-processing keeps; compressed: "
+      "the IB-CC latent messages sent on the uplink.");
+  page.Heading("Base-station beam");
+  AddFigure(page, rate);
+  page.Heading("Scenario");
+  page.Table(SettingsRows(d));
+  page.Heading("Where the wall time went");
+  page.Table(ProfileRows(d));
+  page.Paragraph(
+      "Wall seconds per part (metrics.json profile_s). Nodes that capture on threads of their own "
+      "overlap the rest, so the parts can sum to more than the run's wall time.");
+  page.Heading("Files");
+  std::string links;
+  for (const char* f :
+       {"manifest.json", "metrics.json", "truth.csv", "estimates.csv", "packets.csv",
+        "rate_snr.csv", "world_top.csv", "layout.csv", "report/errors.csv", "report/windows.csv",
+        "report/packets_by_fate.csv", "report/latency.csv"}) {
+    if (!fs::is_regular_file(d.dir / f, ec)) continue;
+    links += std::string(links.empty() ? "" : " · ") + "<a href=\"" + HtmlEscape(f) + "\">" +
+             HtmlEscape(f) + "</a>";
+  }
+  page.RawParagraph(links);
+  core::WriteFileAtomic((d.dir / "report.html").string(), page.str());
+  return warnings;
+}
+
+}  // namespace uavsim::results
