@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <stdexcept>
 
 namespace uavsim::results {
@@ -15,6 +16,33 @@ std::vector<std::string> SplitCsvLine(const std::string& line) {
       cells.back() += c;
   }
   return cells;
+}
+
+long CsvFile::Column(const std::string& name) const {
+  for (std::size_t i = 0; i < header.size(); ++i)
+    if (header[i] == name) return static_cast<long>(i);
+  return -1;
+}
+
+std::string ReadCsvFile(const std::string& path, CsvFile* out) {
+  *out = CsvFile{};
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return "cannot read the file";
+  std::string line;
+  if (!std::getline(in, line)) return "the file is empty";
+  if (!line.empty() && line.back() == '\r') line.pop_back();
+  out->header = SplitCsvLine(line);
+  for (std::size_t number = 2; std::getline(in, line); ++number) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.empty()) continue;
+    std::vector<std::string> cells = SplitCsvLine(line);
+    if (cells.size() != out->header.size())
+      return "line " + std::to_string(number) + " has " + std::to_string(cells.size()) +
+             " cells, the header " + std::to_string(out->header.size());
+    out->rows.push_back(std::move(cells));
+    out->line.push_back(number);
+  }
+  return "";
 }
 
 std::string FormatFixed(double x, int decimals) {

@@ -12,6 +12,19 @@ namespace uavsim::results {
 // so "a,,b," has four cells and "" one.
 std::vector<std::string> SplitCsvLine(const std::string& line);
 
+// A plain CSV file read whole: its header's cells and each non-empty
+// line's cells (a trailing '\r' dropped), every row as wide as the header.
+struct CsvFile {
+  std::vector<std::string> header;
+  std::vector<std::vector<std::string>> rows;
+  std::vector<std::size_t> line;  // each row's line number in the file (the header's is 1)
+  long Column(const std::string& name) const;  // its index, or -1
+};
+
+// Reads `path` into *out. Returns "" on success, else why not: "cannot read
+// the file", "the file is empty", "line N has K cells, the header H".
+std::string ReadCsvFile(const std::string& path, CsvFile* out);
+
 // Fixed-point with `decimals` digits; "-0.000" is printed as "0.000".
 std::string FormatFixed(double x, int decimals);
 

@@ -26,17 +26,9 @@ std::string PlotCsv(const std::string& csv_path, const PlotSpec& spec) {
   const std::string png =
       spec.png_path.empty() ? fs::path(csv_path).replace_extension(".png").string() : spec.png_path;
 
-  std::ifstream in(csv_path, std::ios::binary);
-  if (!in) return where + "cannot read the file";
-  std::string line;
-  if (!std::getline(in, line)) return where + "the file is empty";
-  if (!line.empty() && line.back() == '\r') line.pop_back();
-  const std::vector<std::string> header = SplitCsvLine(line);
-  const auto column = [&](const std::string& name) -> long {
-    for (std::size_t i = 0; i < header.size(); ++i)
-      if (header[i] == name) return static_cast<long>(i);
-    return -1;
-  };
+  CsvFile csv;
+  if (std::string err = ReadCsvFile(csv_path, &csv); !err.empty()) return where + err;
+  const auto column = [&csv](const std::string& name) { return csv.Column(name); };
   const long xc = column(spec.x_column), yc = column(spec.y_column);
   const long gc = spec.group_column.empty() ? -2 : column(spec.group_column);
   if (xc < 0) return where + "no column \"" + spec.x_column + "\"";
@@ -46,16 +38,9 @@ std::string PlotCsv(const std::string& csv_path, const PlotSpec& spec) {
   if (ebc == -1) return where + "no column \"" + spec.y_error_column + "\"";
 
   std::vector<Series> series;
-  std::size_t row = 1;
-  while (std::getline(in, line)) {
-    ++row;
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (line.empty()) continue;
-    const std::vector<std::string> cells = SplitCsvLine(line);
-    if (cells.size() != header.size())
-      return where + "line " + std::to_string(row) + " has " + std::to_string(cells.size()) +
-             " cells, the header " + std::to_string(header.size());
-    const std::string at = where + "line " + std::to_string(row) + ": ";
+  for (std::size_t r = 0; r < csv.rows.size(); ++r) {
+    const std::vector<std::string>& cells = csv.rows[r];
+    const std::string at = where + "line " + std::to_string(csv.line[r]) + ": ";
     double x = 0.0, y = 0.0, half_width = 0.0;
     const bool y_missing = spec.skip_empty_y && cells[yc].empty();
     if (!ParseFiniteNumber(cells[xc], &x) || (!y_missing && !ParseFiniteNumber(cells[yc], &y)))

@@ -31,21 +31,19 @@ using core::Json;
 // ---------------------------------------------------------------------------
 // Reading the run's CSVs
 
-// A CSV file as text cells; columns found by name.
-struct Table {
+// A CSV file of the run (columns found by name); errors name the file.
+struct Table : CsvFile {
   std::string name;  // for messages
-  std::vector<std::string> header;
-  std::vector<std::vector<std::string>> rows;
 
   long Column(const std::string& column) const {
-    for (std::size_t i = 0; i < header.size(); ++i)
-      if (header[i] == column) return static_cast<long>(i);
-    throw std::invalid_argument(name + ": no column \"" + column + "\"");
+    const long c = CsvFile::Column(column);
+    if (c < 0) throw std::invalid_argument(name + ": no column \"" + column + "\"");
+    return c;
   }
   double Number(std::size_t row, long column) const {
     double x = 0.0;
     if (!ParseFiniteNumber(rows[row][static_cast<std::size_t>(column)], &x))
-      throw std::invalid_argument(name + ": line " + std::to_string(row + 2) + ": \"" +
+      throw std::invalid_argument(name + ": line " + std::to_string(line[row]) + ": \"" +
                                   header[static_cast<std::size_t>(column)] +
                                   "\" is not a finite number");
     return x;
@@ -57,20 +55,10 @@ std::optional<Table> ReadTable(const fs::path& dir, const std::string& file) {
   const fs::path path = dir / file;
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) return std::nullopt;
-  std::istringstream in(core::ReadFileBytes(path.string()));
   Table t;
+  if (std::string err = ReadCsvFile(path.string(), &t); !err.empty())
+    throw std::invalid_argument(path.string() + ": " + err);
   t.name = path.string();
-  std::string line;
-  if (!std::getline(in, line)) throw std::invalid_argument(t.name + ": empty file");
-  t.header = SplitCsvLine(line);
-  while (std::getline(in, line)) {
-    if (line.empty()) continue;
-    t.rows.push_back(SplitCsvLine(line));
-    if (t.rows.back().size() != t.header.size())
-      throw std::invalid_argument(t.name + ": line " + std::to_string(t.rows.size() + 1) + " has " +
-                                  std::to_string(t.rows.back().size()) + " cells, the header " +
-                                  std::to_string(t.header.size()));
-  }
   return t;
 }
 
@@ -169,8 +157,8 @@ RunData Load(const std::string& dir) {
       d.truth_t.push_back(d.truth->Number(i, t));
       d.truth_p.emplace_back(d.truth->Number(i, x), d.truth->Number(i, y), d.truth->Number(i, z));
       if (i > 0 && d.truth_t[i] <= d.truth_t[i - 1])
-        throw std::invalid_argument(d.truth->name + ": t_s must increase (line " +
-                                    std::to_string(i + 2) + ")");
+        throw std::invalid_argument(d.truth->name + ": line " + std::to_string(d.truth->line[i]) +
+                                    ": t_s must increase");
     }
   }
   if (d.estimates) {
@@ -267,7 +255,8 @@ Packets CountPackets(const RunData& d) {
     const std::string& modality = t.rows[i][static_cast<std::size_t>(mc)];
     const double w = t.Number(i, wc);
     if (w < 0)
-      throw std::invalid_argument(t.name + ": negative window on line " + std::to_string(i + 2));
+      throw std::invalid_argument(t.name + ": line " + std::to_string(t.line[i]) +
+                                  ": negative window");
     const std::string& status = t.rows[i][static_cast<std::size_t>(sc)];
     Reception& r = out.windows[static_cast<std::size_t>(w)][modality];
     Reception& total = out.totals[modality];
@@ -280,7 +269,7 @@ Packets CountPackets(const RunData& d) {
     else if (status == "in_flight")
       ++r.in_flight, ++total.in_flight;
     else
-      throw std::invalid_argument(t.name + ": line " + std::to_string(i + 2) +
+      throw std::invalid_argument(t.name + ": line " + std::to_string(t.line[i]) +
                                   ": unknown status \"" + status + "\"");
     if (!t.rows[i][static_cast<std::size_t>(lc)].empty())
       out.latency_ms[modality].push_back(1000.0 * t.Number(i, lc));

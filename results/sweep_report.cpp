@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <boost/math/distributions/students_t.hpp>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -22,6 +23,9 @@
 #include <vector>
 
 #include "results/csv.h"
+#include "results/gnuplot.h"
+#include "results/html.h"
+#include "results/panel_plot.h"
 #include "results/plot.h"
 #include "results/run_directory.h"
 
@@ -52,20 +56,6 @@ std::string CleanCell(const std::string& s) {
 
 // A value as summary/aggregate cells show it: 6 decimals, "" when missing.
 std::string Cell(const Value& v) { return v ? FormatFixed(*v, 6) : std::string(); }
-
-// The shortest text that reads back as `x` (locale-independent).
-std::string Shortest(double x) {
-  char buf[64];
-  const auto r = std::to_chars(buf, buf + sizeof buf, x);
-  return std::string(buf, r.ptr);
-}
-
-// A finite number filling all of `s`.
-bool ParseNumber(const std::string& s, double* x) {
-  const char* end = s.data() + s.size();
-  const auto r = std::from_chars(s.data(), end, *x);
-  return r.ec == std::errc() && r.ptr == end && std::isfinite(*x);
-}
 
 // An SNR cell as a column name shows it: trailing zeros (and a bare point)
 // trimmed, "-10.00" -> "-10", "2.50" -> "2.5", "-0.00" -> "0".
@@ -127,7 +117,7 @@ PointRates ParseRateSnr(const SweepPoint& point) {
     const std::string at = "line " + std::to_string(line_no) + ": ";
     if (cells.size() != header.size()) throw fail(at + "wrong number of cells");
     double snr = 0.0, rate = 0.0;
-    if (!ParseNumber(cells[snr_c], &snr) || !ParseNumber(cells[rate_c], &rate))
+    if (!ParseFiniteNumber(cells[snr_c], &snr) || !ParseFiniteNumber(cells[rate_c], &rate))
       throw fail(at + "expected finite numbers in snr_db and rate_bps_hz");
     if (snr == 0.0) snr = 0.0;  // -0 and 0 are one SNR
     const std::string& beam = cells[beam_c];
@@ -338,7 +328,7 @@ void CheckAxes(const SweepReportInputs& in) {
       if (v < 0 || static_cast<std::size_t>(v) >= labels.size())
         throw Invalid("axis " + a.stem + ": no value " + std::to_string(v));
       if (!std::isfinite(x) || (a.log_x && x <= 0.0))
-        throw Invalid("axis " + a.stem + ": x " + Shortest(x) + " cannot be drawn");
+        throw Invalid("axis " + a.stem + ": x " + ShortestNumber(x) + " cannot be drawn");
     }
   }
 }
@@ -470,6 +460,29 @@ std::string SeriesLabel(const Report& r, const std::string& key, const std::vect
   return CleanCell(label);
 }
 
+// Adds to `t` metric m's curve along axis `a` at the other parameters'
+// values `combo`: a row "x,mean,ci95" + `tail` per axis value that has a
+// setting (an empty mean where no point of it has a value), or nothing if
+// the metric has no value anywhere on it.
+void AddCurve(const Report& r, const SweepAxis& a, std::size_t m, const std::vector<int>& combo,
+              const std::vector<std::pair<int, double>>& xs, const std::vector<std::string>& tail,
+              CsvTable* t) {
+  std::vector<std::vector<std::string>> rows;
+  bool any = false;  // a series with no value at all is left out
+  for (const auto& [v, x] : xs) {
+    std::vector<int> vi = combo;
+    vi[a.parameter] = v;
+    const auto it = r.setting_of.find(vi);
+    if (it == r.setting_of.end()) continue;
+    const Stats& st = r.settings[it->second].stats[m];
+    any = any || st.mean.has_value();
+    rows.push_back({ShortestNumber(x), Cell(st.mean), Cell(st.ci95)});
+    rows.back().insert(rows.back().end(), tail.begin(), tail.end());
+  }
+  if (any)
+    for (const auto& row : rows) t->AddRow(row);
+}
+
 // The curves of every metric of `kind` along axis `a`: a series per metric
 // and combination of the other parameters, a row per axis value that has a
 // setting (an empty y where no point of it has a value).
@@ -479,22 +492,8 @@ CsvTable AxisCurves(const Report& r, const SweepAxis& a, Kind kind,
   const auto combos = OtherCombinations(r, a, xs);
   for (std::size_t m = 0; m < r.metrics.size(); ++m) {
     if (r.metrics[m].kind != kind) continue;
-    for (const auto& combo : combos) {
-      const std::string series = SeriesLabel(r, r.metrics[m].key, combo);
-      std::vector<std::vector<std::string>> rows;
-      bool any = false;  // a series with no value at all is left out
-      for (const auto& [v, x] : xs) {
-        std::vector<int> vi = combo;
-        vi[a.parameter] = v;
-        const auto it = r.setting_of.find(vi);
-        if (it == r.setting_of.end()) continue;
-        const Stats& st = r.settings[it->second].stats[m];
-        any = any || st.mean.has_value();
-        rows.push_back({Shortest(x), Cell(st.mean), Cell(st.ci95), series});
-      }
-      if (any)
-        for (const auto& row : rows) t.AddRow(row);
-    }
+    for (const auto& combo : combos)
+      AddCurve(r, a, m, combo, xs, {SeriesLabel(r, r.metrics[m].key, combo)}, &t);
   }
   return t;
 }
@@ -510,7 +509,7 @@ bool SpansDecades(const CsvTable& curves) {
     const auto a = line.find(','), b = line.find(',', a + 1);
     double y = 0.0;
     if (a == std::string::npos || b == a + 1) continue;  // missing y
-    if (!ParseNumber(line.substr(a + 1, b - a - 1), &y) || y <= 0.0) return false;
+    if (!ParseFiniteNumber(line.substr(a + 1, b - a - 1), &y) || y <= 0.0) return false;
     lo = std::min(lo, y), hi = std::max(hi, y);
   }
   return hi > 0.0 && hi / lo >= 20.0;
@@ -578,6 +577,292 @@ void WriteRatePlots(const Report& r, const fs::path& plots, std::vector<std::str
   }
 }
 
+// ---------------------------------------------------------------------------
+// Small multiples: long CSVs "x,y,ci95,series,panel" drawn by PlotPanels
+
+// A figure of report.html: its PNG and CSV relative to the sweep folder, a
+// caption and, when it could not be drawn, why.
+struct Figure {
+  std::string png, csv, caption, missing;
+};
+
+CsvTable PanelTable() { return CsvTable({"x", "y", "ci95", "series", "panel"}); }
+
+// "name=label, name=label" over the parameters that vary, at `value_index`
+// (an index < 0 is left out).
+std::string VaryingText(const Report& r, const std::vector<int>& value_index) {
+  std::string text;
+  for (std::size_t k = 0; k < value_index.size(); ++k)
+    if (value_index[k] >= 0 && r.varies[k])
+      text += (text.empty() ? "" : ", ") + r.in.parameters[k].name + "=" +
+              r.in.parameters[k].labels[value_index[k]];
+  return text;
+}
+
+// A label as words inside a sentence: "Uplink loss" -> "uplink loss" (not
+// "SNR (dB)").
+std::string MidSentence(std::string label) {
+  if (label.size() >= 2 && std::isupper(static_cast<unsigned char>(label[0])) &&
+      std::islower(static_cast<unsigned char>(label[1])))
+    label[0] = static_cast<char>(std::tolower(static_cast<unsigned char>(label[0])));
+  return label;
+}
+
+// The names of the parameters that vary, but `except`, as "a and b" ("" if
+// none).
+std::string VaryingNames(const Report& r, int except) {
+  std::vector<std::string> names;
+  for (std::size_t k = 0; k < r.varies.size(); ++k)
+    if (r.varies[k] && static_cast<int>(k) != except) names.push_back(r.in.parameters[k].name);
+  std::string text;
+  for (std::size_t i = 0; i < names.size(); ++i)
+    text += (i == 0 ? "" : i + 1 == names.size() ? " and " : ", ") + names[i];
+  return text;
+}
+
+// "3 seeds" or "1 to 3 seeds": the points per setting.
+std::string SeedsText(const Report& r) {
+  std::size_t lo = std::numeric_limits<std::size_t>::max(), hi = 0;
+  for (const auto& s : r.settings)
+    lo = std::min(lo, s.points.size()), hi = std::max(hi, s.points.size());
+  if (r.settings.empty()) return "no seeds";
+  const std::string n =
+      lo == hi ? std::to_string(hi) : std::to_string(lo) + " to " + std::to_string(hi);
+  return n + (hi == 1 ? " seed" : " seeds");
+}
+
+// The panels of every metric of `kind` along axis `a`: a panel per
+// combination of the other parameters (in order of first appearance), in it
+// a series per metric with some value there, a row per axis value that has
+// a setting (an empty y where no point of it has a value).
+CsvTable AxisPanels(const Report& r, const SweepAxis& a, Kind kind,
+                    const std::vector<std::pair<int, double>>& xs) {
+  CsvTable t = PanelTable();
+  for (const auto& combo : OtherCombinations(r, a, xs)) {
+    const std::string panel = CleanCell(VaryingText(r, combo));
+    for (std::size_t m = 0; m < r.metrics.size(); ++m) {
+      if (r.metrics[m].kind != kind) continue;
+      AddCurve(r, a, m, combo, xs, {CleanCell(r.metrics[m].key), panel}, &t);
+    }
+  }
+  return t;
+}
+
+// Writes plots/<name>.csv, draws plots/<name>.png beside it and returns the
+// figure; a plot that cannot be drawn adds PlotPanels' message to `failures`.
+Figure WritePanels(const fs::path& plots, const std::string& name, const CsvTable& csv,
+                   const PanelPlotSpec& spec, std::string caption,
+                   std::vector<std::string>* failures) {
+  const std::string csv_path = (plots / (name + ".csv")).string();
+  WriteFileAtomic(csv_path, csv.str());
+  Figure f{"plots/" + name + ".png", "plots/" + name + ".csv", std::move(caption), ""};
+  f.missing = PlotPanels(csv_path, spec);
+  if (!f.missing.empty()) failures->push_back(f.missing);
+  return f;
+}
+
+// One family of panel figures: a heading, what its y is, and its figures.
+struct Section {
+  std::string heading;
+  std::vector<Figure> figures;
+};
+
+// panels_rmse_<stem>, panels_coverage_<stem> and panels_delivery_<stem> for
+// each axis with two or more x values, as sections of the report.
+std::vector<Section> WriteAxisPanels(const Report& r, const fs::path& plots,
+                                     std::vector<std::string>* failures) {
+  struct Family {
+    Kind kind;
+    const char* prefix;
+    const char* heading;
+    const char* what;  // for titles and captions
+    const char* y_label;
+    const char* legend;
+    bool share;  // a share in [0, 1]
+  };
+  const Family families[] = {
+      {Kind::kRmse, "panels_rmse_", "Localisation RMSE", "localisation RMSE", "RMSE (m)", "method",
+       false},
+      {Kind::kCoverage, "panels_coverage_", "Coverage: windows with an estimate",
+       "share of windows with an estimate", "Windows with an estimate (share)", "method", true},
+      {Kind::kDelivery, "panels_delivery_", "Uplink delivery", "uplink delivery ratio",
+       "Delivery ratio (on time / sent)", "modality", true},
+  };
+  std::vector<Section> sections;
+  for (const auto& f : families) {
+    Section section{f.heading, {}};
+    for (const auto& a : r.in.axes) {
+      const auto xs = AxisValuesPresent(r, a);
+      if (xs.size() < 2) continue;
+      const CsvTable csv = AxisPanels(r, a, f.kind, xs);
+      if (csv.rows() == 0) continue;  // no value of this family at all
+      const std::string others = VaryingNames(r, a.parameter);
+      PanelPlotSpec spec;
+      spec.title = Titled(r.in.title, std::string(f.what) + " vs " + MidSentence(a.x_label) +
+                                          (others.empty() ? "" : ", one panel per " + others));
+      spec.x_label = a.x_label;
+      spec.y_label = f.y_label;
+      spec.legend_title = f.legend;
+      spec.log_x = a.log_x;
+      // RMSEs that span decades (a diverged filter beside a good one) on a
+      // logarithmic axis, so that every curve stays readable.
+      spec.log_y = f.kind == Kind::kRmse && SpansDecades(csv);
+      spec.y_min_zero = true;
+      if (f.share) spec.y_max = 1.0;
+      std::string caption = std::string(1, static_cast<char>(std::toupper(f.what[0]))) +
+                            (f.what + 1) + " of each " + f.legend + " against " +
+                            MidSentence(a.x_label) +
+                            (others.empty() ? "" : ", one panel per " + others) +
+                            ". Line: the mean over the " + SeedsText(r) +
+                            " of each setting; shaded band: its 95 % confidence interval "
+                            "(Student t); a point left out: no seed had a value.";
+      if (spec.log_y)
+        caption +=
+            " Logarithmic y axis (the values span more than a factor of 20): a band that reaches "
+            "0 runs down to the bottom.";
+      section.figures.push_back(
+          WritePanels(plots, f.prefix + a.stem, csv, spec, std::move(caption), failures));
+    }
+    if (!section.figures.empty()) sections.push_back(std::move(section));
+  }
+  return sections;
+}
+
+// panels_rate_snr: rate vs SNR, a panel per setting, a series per beam.
+std::vector<Section> WriteRatePanels(const Report& r, const fs::path& plots,
+                                     std::vector<std::string>* failures) {
+  CsvTable csv = PanelTable();
+  for (const Setting& s : r.settings) {
+    std::string panel = VaryingText(r, s.value_index);
+    if (panel.empty()) panel = SettingText(r, s);
+    for (std::size_t m = 0; m < r.metrics.size(); ++m)
+      if (r.metrics[m].kind == Kind::kRate)
+        csv.AddRow({r.metrics[m].snr_text, Cell(s.stats[m].mean), Cell(s.stats[m].ci95),
+                    CleanCell(r.metrics[m].key), CleanCell(panel)});
+  }
+  if (csv.rows() == 0) return {};  // no rates in the whole sweep
+  PanelPlotSpec spec;
+  spec.title = Titled(r.in.title, "achievable rate vs SNR, one panel per setting");
+  spec.x_label = "SNR (dB)";
+  spec.y_label = "Rate (bit/s/Hz)";
+  spec.legend_title = "beam";
+  spec.y_min_zero = true;
+  std::string caption =
+      "Achievable rate of the base station's beam to the UAV against SNR, the beam steered at "
+      "each method's estimate (perfect: at the true position), one panel per setting. Line: "
+      "the mean over the " +
+      SeedsText(r) + " of each setting; shaded band: its 95 % confidence interval.";
+  return {{"Achievable rate vs SNR",
+           {WritePanels(plots, "panels_rate_snr", csv, spec, std::move(caption), failures)}}};
+}
+
+// ---------------------------------------------------------------------------
+// report.html
+
+// "mean ± ci95" to 3 significant digits of the mean (3 decimals for a
+// share), the interval to as many decimals; "–" without a value.
+std::string MeanCi(const Stats& st, bool share) {
+  if (!st.mean) return "\u2013";
+  int decimals = 3;
+  if (!share && *st.mean != 0.0)
+    decimals = std::clamp(2 - static_cast<int>(std::floor(std::log10(std::abs(*st.mean)))), 0, 6);
+  std::string text = FormatFixed(*st.mean, decimals);
+  if (st.ci95) text += " \u00b1 " + FormatFixed(*st.ci95, decimals);
+  return text;
+}
+
+// A row per setting: the parameters that vary (all if none does), seeds,
+// then "mean ± ci95" per metric of `kind`. Empty if there is no such metric.
+std::vector<std::vector<std::string>> SettingTable(const Report& r, Kind kind, bool share) {
+  std::vector<std::size_t> shown, metrics;
+  for (std::size_t k = 0; k < r.in.parameters.size(); ++k)
+    if (r.varies[k]) shown.push_back(k);
+  if (shown.empty())
+    for (std::size_t k = 0; k < r.in.parameters.size(); ++k) shown.push_back(k);
+  for (std::size_t m = 0; m < r.metrics.size(); ++m)
+    if (r.metrics[m].kind == kind) metrics.push_back(m);
+  if (metrics.empty()) return {};
+  std::vector<std::vector<std::string>> rows(1);
+  for (std::size_t k : shown) rows[0].push_back(r.in.parameters[k].name);
+  rows[0].push_back("seeds");
+  for (std::size_t m : metrics) rows[0].push_back(r.metrics[m].key);
+  for (const Setting& s : r.settings) {
+    std::vector<std::string> row;
+    for (std::size_t k : shown) row.push_back(r.in.parameters[k].labels[s.value_index[k]]);
+    row.push_back(std::to_string(s.points.size()));
+    for (std::size_t m : metrics) row.push_back(MeanCi(s.stats[m], share));
+    rows.push_back(std::move(row));
+  }
+  return rows;
+}
+
+// The keys of the metrics of `kind`, ", "-separated.
+std::string KeysText(const Report& r, Kind kind) {
+  std::string text;
+  std::set<std::string> seen;
+  for (const auto& m : r.metrics)
+    if (m.kind == kind && seen.insert(m.key).second) text += (text.empty() ? "" : ", ") + m.key;
+  return text;
+}
+
+std::string ReportPage(const Report& r, const std::vector<Section>& sections) {
+  HtmlPage page(r.in.title.empty() ? "Sweep report" : "Sweep " + r.in.title);
+  page.Heading("What varied");
+  std::string overview = std::to_string(r.in.points.size()) +
+                         " points: " + std::to_string(r.settings.size()) + " settings (" +
+                         (VaryingNames(r, -1).empty() ? "nothing varies" : VaryingNames(r, -1)) +
+                         ") \u00d7 " + SeedsText(r) + " per setting.";
+  page.Paragraph(overview);
+  std::vector<std::vector<std::string>> parameters{{"parameter", "values", "count"}};
+  for (const auto& p : r.in.parameters) {
+    std::string labels;
+    for (const auto& l : p.labels) labels += (labels.empty() ? "" : "; ") + l;
+    parameters.push_back({p.name, labels, std::to_string(p.labels.size())});
+  }
+  page.Table(parameters);
+  const std::string methods = KeysText(r, Kind::kRmse), modalities = KeysText(r, Kind::kDelivery);
+  if (!methods.empty()) page.Paragraph("Methods: " + methods + ".");
+  if (!modalities.empty()) page.Paragraph("Modalities on the uplink: " + modalities + ".");
+  page.RawParagraph("Tables: " + HtmlLink("summary.csv", "summary.csv") +
+                    " (a row per point) and " + HtmlLink("aggregate.csv", "aggregate.csv") +
+                    " (a row per setting: mean and 95 % confidence interval over its seeds).");
+  page.Paragraph(
+      "Each figure is a grid of panels that share their axes, so that panels compare at a "
+      "glance; a curve keeps its colour and marker in every panel, named in the legend below "
+      "the panels. A line joins the mean over the seeds of each setting; the shaded band around "
+      "it is the 95 % confidence interval of that mean (none with a single seed).");
+  for (const Section& s : sections) {
+    page.Heading(s.heading);
+    for (const Figure& f : s.figures) {
+      page.Figure(f.png, f.caption, f.missing);
+      page.RawParagraph("Data: " + HtmlLink(f.csv, f.csv));
+    }
+  }
+  const struct {
+    Kind kind;
+    const char* heading;
+    bool share;
+  } tables[] = {
+      {Kind::kRmse, "RMSE per setting (m, mean \u00b1 95 % CI over seeds)", false},
+      {Kind::kCoverage, "Coverage per setting (share of windows, mean \u00b1 95 % CI)", true},
+      {Kind::kDelivery, "Delivery per setting (on time / sent, mean \u00b1 95 % CI)", true},
+  };
+  bool explained = false;
+  for (const auto& t : tables) {
+    const auto rows = SettingTable(r, t.kind, t.share);
+    if (rows.empty()) continue;
+    page.Heading(t.heading);
+    if (!explained)
+      page.Paragraph(
+          "Mean \u00b1 half-width of its 95 % confidence interval over the seeds that have a "
+          "value; a value without \u00b1: one seed had one; \u2013: none had. seeds: the "
+          "points of the setting.");
+    explained = true;
+    page.Table(rows);
+  }
+  return page.str();
+}
+
 }  // namespace
 
 std::vector<std::string> WriteSweepReport(const std::string& dir, const SweepReportInputs& in) {
@@ -604,6 +889,9 @@ std::vector<std::string> WriteSweepReport(const std::string& dir, const SweepRep
   std::vector<std::string> failures;
   WriteAxisPlots(r, plots, &failures);
   WriteRatePlots(r, plots, &failures);
+  std::vector<Section> sections = WriteAxisPanels(r, plots, &failures);
+  for (Section& s : WriteRatePanels(r, plots, &failures)) sections.push_back(std::move(s));
+  WriteFileAtomic((root / "report.html").string(), ReportPage(r, sections));
   return failures;
 }
 

@@ -1,9 +1,9 @@
 // A sweep's tables and curves, from its finished points (DESIGN.md "sweep"):
 // summary.csv (a row per point), aggregate.csv (a row per setting: mean and
-// 95 % confidence interval over the seeds) and PNG plots drawn with gnuplot
-// from CSVs written beside them. Knows nothing of scenarios: the sweep hands
-// it each point's parameter cells and run-directory contents, and the axes
-// it should plot against.
+// 95 % confidence interval over the seeds), PNG plots drawn with gnuplot
+// from CSVs written beside them, and report.html that shows them. Knows
+// nothing of scenarios: the sweep hands it each point's parameter cells and
+// run-directory contents, and the axes it should plot against.
 #pragma once
 
 #include <cstdint>
@@ -77,6 +77,23 @@ struct SweepReportInputs {
 //                 cell); per setting k: rate_snr_<kkk> (rate vs SNR, a line
 //                 per beam). Each a long CSV "x,y,ci95,series" beside its
 //                 PNG.
+//                 Small multiples (results/panel_plot.h), each a long CSV
+//                 "x,y,ci95,series,panel" beside its PNG: per axis with >= 2
+//                 x values panels_rmse_<stem>, panels_coverage_<stem> and
+//                 panels_delivery_<stem>, a panel per combination of the
+//                 other parameters that vary ("weather=fog 100 m"; "" if
+//                 none does), a series per method or modality with a value
+//                 in that panel, a row per axis value that has a setting
+//                 (RMSE on a log y axis when it spans a factor of 20);
+//                 panels_rate_snr, a panel per setting (the parameters that
+//                 vary, "loss=0.1; weather=clear", or all if none does), a
+//                 series per beam, a row per SNR.
+//  report.html    written last: the sweep's name, what varied (parameters
+//                 and values, seeds per setting, points), the small
+//                 multiples with captions (a plot not drawn shows why), per
+//                 setting tables of RMSE, coverage and delivery as
+//                 "mean ± ci95", links to summary.csv, aggregate.csv and each
+//                 figure's CSV; images and links by relative path.
 //
 // Numbers have 6 decimals; a missing value is an empty cell. The CSVs are
 // plain (no quoting): in every text cell ',' becomes ';', '"' becomes '\''

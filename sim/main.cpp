@@ -115,8 +115,10 @@ const char* kSweepHelp =
     "Every point is checked before anything runs. Rerunning the same command resumes:\n"
     "finished points are kept, killed ones redone. When all points are done, DIR gets\n"
     "summary.csv (a row per point), aggregate.csv (mean and 95 % confidence interval over\n"
-    "the seeds) and plots/ (RMSE and delivery vs each numeric parameter, rate vs SNR per\n"
-    "setting). The spec format is in scenarios/sweeps/README.md.\n"
+    "the seeds), plots/ (RMSE, coverage and delivery vs each numeric parameter as small\n"
+    "multiples with confidence bands, rate vs SNR per setting) and report.html, which\n"
+    "shows them (`uavsim report DIR` redraws it). The spec format is in\n"
+    "scenarios/sweeps/README.md.\n"
     "\n"
     "  --out DIR     the sweep folder (default runs/NAME)\n"
     "  --jobs N      points at a time (default 1; each gets cores / N threads); under\n"
@@ -465,8 +467,8 @@ void PrintSweepOutcome(const std::string& dir, const uavsim::sim::SweepOutcome& 
   if (r.missing > 0) std::printf(", %zu left to other shards", r.missing);
   std::printf("\n");
   if (r.reported)
-    std::printf("%s/summary.csv, %s/aggregate.csv and %s/plots/ written\n", dir.c_str(),
-                dir.c_str(), dir.c_str());
+    std::printf("%s/summary.csv, %s/aggregate.csv, %s/plots/ and %s/report.html written\n",
+                dir.c_str(), dir.c_str(), dir.c_str(), dir.c_str());
   else if (r.missing > 0 && r.failed == 0)
     std::printf("when every shard is done: uavsim sweep merge %s\n", dir.c_str());
 }

@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <regex>
 #include <sstream>
 #include <stdexcept>
 
@@ -132,6 +133,31 @@ std::string ConfigErrorOf(const std::function<void()>& f) {
     return e.what();
   }
   return "";
+}
+
+std::vector<std::string> HtmlReferences(const std::string& html) {
+  std::vector<std::string> refs;
+  const std::regex attribute("(?:src|href)=\"([^\"]*)\"");
+  for (auto it = std::sregex_iterator(html.begin(), html.end(), attribute);
+       it != std::sregex_iterator(); ++it)
+    refs.push_back((*it)[1].str());
+  return refs;
+}
+
+ReportReferences CheckReportReferences(const std::string& dir) {
+  ReportReferences out;
+  for (const std::string& f : HtmlReferences(ReadFile(dir + "/report.html"))) {
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(dir + "/" + f, ec)) {
+      out.missing.push_back(f);
+      continue;
+    }
+    if (f.size() > 4 && f.compare(f.size() - 4, 4, ".png") == 0) {
+      ++out.pngs;
+      if (std::filesystem::file_size(dir + "/" + f, ec) < 1000) out.small_pngs.push_back(f);
+    }
+  }
+  return out;
 }
 
 }  // namespace uavsim::testing

@@ -31,6 +31,18 @@ std::string TempDir(const std::string& tag);
 std::string ReadFile(const std::string& path);
 void WriteFile(const std::string& path, const std::string& content);
 
+// Every src="..." and href="..." of an HTML page, in order.
+std::vector<std::string> HtmlReferences(const std::string& html);
+
+// What DIR/report.html references: the references that name no file in DIR,
+// how many PNGs it shows, and those of them of fewer than 1000 bytes.
+struct ReportReferences {
+  std::vector<std::string> missing;
+  std::size_t pngs = 0;
+  std::vector<std::string> small_pngs;
+};
+ReportReferences CheckReportReferences(const std::string& dir);
+
 // An axis-aligned box [lo, hi] as 12 outward-wound triangles.
 core::TriangleMesh BoxMesh(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi,
                            std::uint32_t material);

@@ -5,7 +5,6 @@
 
 #include <catch2/catch.hpp>
 #include <filesystem>
-#include <regex>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -79,12 +78,8 @@ std::string HandMadeRun(const std::string& tag, const std::string& name = "hand"
 
 // Every src="..." and href="..." of the page.
 std::set<std::string> References(const std::string& html) {
-  std::set<std::string> refs;
-  const std::regex re("(?:src|href)=\"([^\"]*)\"");
-  for (auto it = std::sregex_iterator(html.begin(), html.end(), re); it != std::sregex_iterator();
-       ++it)
-    refs.insert((*it)[1].str());
-  return refs;
+  const auto refs = uavsim::testing::HtmlReferences(html);
+  return {refs.begin(), refs.end()};
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
-// The sweep report: summary and aggregate tables checked against values
-// worked out by hand (t from the printed table), plots drawn by gnuplot, and
-// the gnuplot driver's error bars, missing values and axis options.
+// The sweep report: summary, aggregate and small-multiple tables checked
+// against values worked out by hand (t from the printed table), plots drawn
+// by gnuplot, report.html (its links, tables and escaping), and the gnuplot
+// driver's error bars, missing values and axis options.
 #include "results/sweep_report.h"
 
 #include <stdlib.h>
@@ -158,6 +159,17 @@ bool GnuplotMissing(const std::vector<std::string>& failures) {
   return false;
 }
 
+std::size_t Occurrences(const std::string& text, const std::string& what) {
+  std::size_t n = 0;
+  for (std::size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
+// Every src="..." and href="..." of a page, in order.
+std::vector<std::string> LinksOf(const std::string& html) {
+  return uavsim::testing::HtmlReferences(html);
+}
+
 // Sets an environment variable for the scope.
 struct ScopedEnv {
   std::string name;
@@ -266,7 +278,10 @@ TEST_CASE("Sweep report: the same inputs give the same bytes", "[results][sweep_
   std::vector<std::string> files{"summary.csv", "aggregate.csv"};
   for (const auto& e : fs::directory_iterator(fs::path(a) / "plots"))
     if (e.path().extension() == ".csv") files.push_back("plots/" + e.path().filename().string());
-  CHECK(files.size() == 2 + 2 + 4);  // rmse_loss, delivery_loss, rate_snr_000..003
+  // rmse_loss, delivery_loss, rate_snr_000..003, panels_rmse_loss,
+  // panels_delivery_loss, panels_rate_snr
+  CHECK(files.size() == 2 + 2 + 4 + 3);
+  files.push_back("report.html");
   for (const auto& f : files) {
     INFO(f);
     CHECK(ReadFile(a + "/" + f) == ReadFile(b + "/" + f));
@@ -370,12 +385,25 @@ TEST_CASE("Sweep report: plots that cannot be drawn are reported, their CSVs kep
     ScopedEnv path("PATH", empty_path);
     failures = WriteSweepReport(dir, Grid());
   }
-  REQUIRE(failures.size() == 2 + 4);
+  REQUIRE(failures.size() == 2 + 4 + 3);
   for (const auto& f : failures) CHECK_THAT(f, Catch::Contains("gnuplot not found"));
+  CHECK_THAT(failures.back(), Catch::StartsWith("panel plot "));
   CHECK(fs::exists(dir + "/summary.csv"));
   CHECK(fs::exists(dir + "/plots/rmse_loss.csv"));
   CHECK(fs::exists(dir + "/plots/rate_snr_003.csv"));
+  CHECK(fs::exists(dir + "/plots/panels_rmse_loss.csv"));
+  CHECK(fs::exists(dir + "/plots/panels_rate_snr.csv"));
   CHECK_FALSE(fs::exists(dir + "/plots/rmse_loss.png"));
+  CHECK_FALSE(fs::exists(dir + "/plots/panels_rmse_loss.png"));
+  // The report says why, in place of each figure, and shows no image.
+  const std::string html = ReadFile(dir + "/report.html");
+  CHECK(Occurrences(html, "<p class=\"missing\">Not drawn: panel plot ") == 3);
+  CHECK_THAT(html, Catch::Contains("gnuplot not found"));
+  CHECK_THAT(html, !Catch::Contains("<img"));
+  for (const auto& link : LinksOf(html)) {
+    INFO(link);
+    CHECK(fs::is_regular_file(dir + "/" + link));
+  }
 }
 
 TEST_CASE("Sweep report: inconsistent inputs are refused before anything is written",
@@ -492,4 +520,139 @@ TEST_CASE("PlotCsv: error bars, missing values, log x, y from zero, legend below
   // No temporary image left behind by any of them.
   for (const auto& e : fs::directory_iterator(dir))
     CHECK(e.path().filename().string().rfind(".curves.png", 0) == std::string::npos);
+}
+
+TEST_CASE("Sweep report: small multiples along an axis, a panel per other setting",
+          "[results][sweep_report]") {
+  const std::string dir = TempDir("sweep-panels");
+  const std::vector<std::string> failures = WriteSweepReport(dir, Grid());
+  const std::string plots = dir + "/plots/";
+  using Row = std::vector<std::string>;
+
+  // RMSE along loss: a panel per weather; in each a series per method with a
+  // value there (uavloc_camera only in fog), a row per loss.
+  const Csv rmse = ParseCsv(ReadFile(plots + "panels_rmse_loss.csv"));
+  CHECK(rmse.header == Row{"x", "y", "ci95", "series", "panel"});
+  REQUIRE(rmse.rows.size() == 10);
+  // Clear, loss 0.1: ekf 1, 2, 4 (mean 7/3, s^2 = 7/3); loss 0.2: 6 alone.
+  CHECK(rmse.rows[0] == Row{"0.1", "2.333333", rmse.At(0, "ci95"), "ekf", "weather=clear"});
+  CHECK(Num(rmse.At(0, "ci95")) ==
+        Approx(kT2 * std::sqrt(7.0 / 3.0) / std::sqrt(3.0)).margin(1e-5));
+  CHECK(rmse.rows[1] == Row{"0.2", "6.000000", "", "ekf", "weather=clear"});
+  // uavloc 3, null, 5 at 0.1; null at 0.2: a missing point.
+  CHECK(rmse.rows[2] == Row{"0.1", "4.000000", rmse.At(2, "ci95"), "uavloc", "weather=clear"});
+  CHECK(Num(rmse.At(2, "ci95")) == Approx(kT1).margin(1e-5));
+  CHECK(rmse.rows[3] == Row{"0.2", "", "", "uavloc", "weather=clear"});
+  // Fog: ekf 2, 3 (s = sqrt(1/2): t s / sqrt(2) = t / 2) and 3, 5 (t).
+  CHECK(rmse.rows[4] == Row{"0.1", "2.500000", rmse.At(4, "ci95"), "ekf", "weather=fog 100 m"});
+  CHECK(Num(rmse.At(4, "ci95")) == Approx(kT1 / 2).margin(1e-5));
+  CHECK(rmse.rows[5] == Row{"0.2", "4.000000", rmse.At(5, "ci95"), "ekf", "weather=fog 100 m"});
+  CHECK(Num(rmse.At(5, "ci95")) == Approx(kT1).margin(1e-5));
+  CHECK(rmse.rows[6] == Row{"0.1", "3.000000", rmse.At(6, "ci95"), "uavloc", "weather=fog 100 m"});
+  CHECK(rmse.rows[7] == Row{"0.2", "5.000000", rmse.At(7, "ci95"), "uavloc", "weather=fog 100 m"});
+  CHECK(rmse.rows[8] == Row{"0.1", "7.500000", "", "uavloc_camera", "weather=fog 100 m"});
+  CHECK(rmse.rows[9] == Row{"0.2", "", "", "uavloc_camera", "weather=fog 100 m"});
+
+  // Delivery: camera everywhere; radar only in clear weather at loss 0.2
+  // (3 of 4); lidar never sent a packet.
+  const Csv delivery = ParseCsv(ReadFile(plots + "panels_delivery_loss.csv"));
+  REQUIRE(delivery.rows.size() == 6);
+  CHECK(delivery.rows[0] ==
+        Row{"0.1", "0.900000", delivery.At(0, "ci95"), "camera", "weather=clear"});
+  CHECK(Num(delivery.At(0, "ci95")) == Approx(kT2 * 0.1 / std::sqrt(3.0)).margin(1e-5));
+  CHECK(delivery.rows[1] == Row{"0.2", "0.500000", "", "camera", "weather=clear"});
+  CHECK(delivery.rows[2] == Row{"0.1", "", "", "radar", "weather=clear"});
+  CHECK(delivery.rows[3] == Row{"0.2", "0.750000", "", "radar", "weather=clear"});
+  // Fog camera 10/10, 9/10 (s = sqrt(0.005)) and 8/10, 6/10 (s = sqrt(0.02)).
+  CHECK(delivery.rows[4] ==
+        Row{"0.1", "0.950000", delivery.At(4, "ci95"), "camera", "weather=fog 100 m"});
+  CHECK(Num(delivery.At(4, "ci95")) == Approx(kT1 * 0.05).margin(1e-5));
+  CHECK(delivery.rows[5] ==
+        Row{"0.2", "0.700000", delivery.At(5, "ci95"), "camera", "weather=fog 100 m"});
+  CHECK(Num(delivery.At(5, "ci95")) == Approx(kT1 * 0.1).margin(1e-5));
+  // No estimated_windows in these metrics: no coverage.
+  CHECK_FALSE(fs::exists(plots + "panels_coverage_loss.csv"));
+
+  // Rate vs SNR: a panel per setting (both parameters vary), a series per
+  // beam, a row per SNR; a beam without values keeps its empty rows.
+  const Csv rate = ParseCsv(ReadFile(plots + "panels_rate_snr.csv"));
+  REQUIRE(rate.rows.size() == 4 * 4);
+  CHECK(rate.rows[0] ==
+        Row{"-10", "2.000000", rate.At(0, "ci95"), "perfect", "loss=0.1; weather=clear"});
+  CHECK(Num(rate.At(0, "ci95")) == Approx(kT2 / std::sqrt(3.0)).margin(1e-5));
+  CHECK(rate.rows[3] == Row{"2.5", "2.000000", "0.000000", "ekf", "loss=0.1; weather=clear"});
+  CHECK(rate.rows[4] == Row{"-10", "0.500000", "", "perfect", "loss=0.2; weather=clear"});
+  CHECK(rate.rows[6] == Row{"-10", "", "", "ekf", "loss=0.2; weather=clear"});
+  CHECK(rate.At(8, "panel") == "loss=0.1; weather=fog 100 m");
+  CHECK(rate.At(12, "panel") == "loss=0.2; weather=fog 100 m");
+  CHECK(rate.rows[15] == Row{"2.5", "1.000000", "0.000000", "ekf", "loss=0.2; weather=fog 100 m"});
+
+  if (GnuplotMissing(failures)) {
+    WARN("gnuplot is not installed: " << failures.front());
+    return;
+  }
+  CHECK(failures.empty());
+  for (const char* png :
+       {"panels_rmse_loss.png", "panels_delivery_loss.png", "panels_rate_snr.png"})
+    CHECK(IsPng(plots + png));
+}
+
+TEST_CASE("Sweep report: report.html shows the sweep, its figures and tables",
+          "[results][sweep_report]") {
+  const std::string dir = TempDir("sweep-html");
+  const std::vector<std::string> failures = WriteSweepReport(dir, Grid());
+  const std::string html = ReadFile(dir + "/report.html");
+
+  CHECK_THAT(html, Catch::StartsWith("<!DOCTYPE html>"));
+  CHECK_THAT(html, Catch::Contains("<h1>Sweep loss-weather</h1>"));
+  // What varied: 8 points in 4 settings of 1 to 3 seeds; each parameter
+  // with its values.
+  CHECK_THAT(html, Catch::Contains("8 points: 4 settings (loss and weather) \u00d7 1 to 3 seeds"));
+  CHECK_THAT(html, Catch::Contains("<td>weather</td><td>clear; fog 100 m</td>"));
+  CHECK_THAT(html, Catch::Contains("Methods: ekf, uavloc, uavloc_camera."));
+  // The small multiples, with captions that say what is drawn.
+  CHECK_THAT(html, Catch::Contains("<img src=\"plots/panels_rmse_loss.png\""));
+  CHECK_THAT(html, Catch::Contains("<img src=\"plots/panels_delivery_loss.png\""));
+  CHECK_THAT(html, Catch::Contains("<img src=\"plots/panels_rate_snr.png\""));
+  CHECK_THAT(html, Catch::Contains("one panel per weather"));
+  CHECK_THAT(html, Catch::Contains("the mean over the 1 to 3 seeds of each setting"));
+  CHECK_THAT(html, Catch::Contains("95 % confidence interval"));
+  // RMSE and delivery per setting as mean ± ci95 from the aggregate: ekf
+  // 2.333 ± 3.795 at (0.1, clear), 6 from one seed at (0.2, clear), uavloc
+  // without a value there; camera 0.9 ± 0.248.
+  CHECK_THAT(html, Catch::Contains("<td class=\"num\">2.33 \u00b1 3.79</td>"));
+  CHECK_THAT(html, Catch::Contains("<td class=\"num\">6.00</td><td>\u2013</td>"));
+  CHECK_THAT(html, Catch::Contains("<td class=\"num\">0.900 \u00b1 0.248</td>"));
+  CHECK_THAT(html, Catch::Contains("<th>camera</th><th>lidar</th><th>radar</th>"));
+  // Links to the tables; every image and link names a file of the sweep.
+  CHECK_THAT(html, Catch::Contains("<a href=\"summary.csv\">"));
+  CHECK_THAT(html, Catch::Contains("<a href=\"aggregate.csv\">"));
+  const std::vector<std::string> links = LinksOf(html);
+  CHECK(links.size() == 2 + 3 + 3);  // tables, PNGs, their CSVs
+  for (const auto& link : links) {
+    INFO(link);
+    CHECK(fs::is_regular_file(dir + "/" + link));
+    if (link.size() > 4 && link.compare(link.size() - 4, 4, ".png") == 0)
+      CHECK(fs::file_size(dir + "/" + link) > 0);
+  }
+  if (GnuplotMissing(failures)) WARN("gnuplot is not installed: " << failures.front());
+}
+
+TEST_CASE("Sweep report: report.html escapes what the sweep names", "[results][sweep_report]") {
+  const std::string dir = TempDir("sweep-html-escape");
+  SweepReportInputs in = Grid();
+  in.title = "<script>x</script>";
+  in.parameters[1].labels[0] = "<b>&\"";
+  in.parameters[1].name = "w<i>";
+  WriteSweepReport(dir, in);
+  const std::string html = ReadFile(dir + "/report.html");
+  CHECK_THAT(html, Catch::Contains("&lt;b&gt;&amp;&quot;"));
+  CHECK_THAT(html, !Catch::Contains("<b>&\""));
+  CHECK_THAT(html, Catch::Contains("<th>w&lt;i&gt;</th>"));
+  CHECK_THAT(html, !Catch::Contains("<i>"));
+  CHECK_THAT(html, Catch::Contains("<h1>Sweep &lt;script&gt;x&lt;/script&gt;</h1>"));
+  CHECK_THAT(html, !Catch::Contains("<script>"));
+  // The panel CSV holds the label as a plain cell.
+  const Csv rmse = ParseCsv(ReadFile(dir + "/plots/panels_rmse_loss.csv"));
+  CHECK(rmse.At(0, "panel") == "w<i>=<b>&'");
 }

@@ -8,7 +8,6 @@
 #include <catch2/catch.hpp>
 #include <chrono>
 #include <filesystem>
-#include <regex>
 #include <sstream>
 #include <thread>
 #include <tuple>
@@ -109,22 +108,10 @@ TEST_CASE("CLI: run writes the run directory of DESIGN.md", "[sim]") {
                                         "t_arrival_s,latency_s\n0.000000,cam1,camera,0,"));
   CHECK(CountLines(packets) == 1 + 90 + 30 + 45);
   // The report references only files that exist, and its PNGs are drawn.
-  {
-    const std::string html = ReadFile(out + "/report.html");
-    const std::regex ref("(?:src|href)=\"([^\"]*)\"");
-    std::size_t images = 0;
-    for (auto it = std::sregex_iterator(html.begin(), html.end(), ref);
-         it != std::sregex_iterator(); ++it) {
-      const std::string f = (*it)[1].str();
-      INFO(f);
-      CHECK(fs::is_regular_file(out + "/" + f));
-      if (f.size() > 4 && f.substr(f.size() - 4) == ".png") {
-        ++images;
-        CHECK(fs::file_size(out + "/" + f) > 1000);
-      }
-    }
-    CHECK(images == 5);  // top view, error vs time, packets, latency, rate vs SNR
-  }
+  const auto refs = uavsim::testing::CheckReportReferences(out);
+  CHECK(refs.missing.empty());
+  CHECK(refs.small_pngs.empty());
+  CHECK(refs.pngs == 5);  // top view, error vs time, packets, latency, rate vs SNR
 
   const std::string truth = ReadFile(out + "/truth.csv");
   CHECK_THAT(truth, Catch::StartsWith("t_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps\n0.000000,"));

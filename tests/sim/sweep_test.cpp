@@ -557,6 +557,21 @@ TEST_CASE("Sweep: a full sweep writes summary.csv, aggregate.csv and plots", "[s
     CHECK(IsPng(ref.dir + "/plots/" + png));
   }
   CHECK(fs::is_regular_file(ref.dir + "/plots/rmse_vs_loss.csv"));
+
+  // report.html, and `uavsim report` redraws it (on a copy: other tests
+  // compare the reference's files), referencing only files that exist.
+  CHECK(fs::is_regular_file(ref.dir + "/report.html"));
+  const std::string copy = TempDir("sweep-report") + "/copy";
+  fs::copy(ref.dir, copy, fs::copy_options::recursive);
+  fs::remove(copy + "/report.html");
+  fs::remove_all(copy + "/plots");
+  const CliResult redraw = RunCli({"report", copy, "--quiet"});
+  INFO(redraw.err);
+  CHECK(redraw.exit_code == 0);
+  const auto refs = uavsim::testing::CheckReportReferences(copy);
+  CHECK(refs.missing.empty());
+  CHECK(refs.small_pngs.empty());
+  CHECK(refs.pngs >= 2);  // the loss axis's small multiples and rate vs SNR at least
 }
 
 TEST_CASE("Sweep: a killed sweep resumes where it stopped, to the same tables", "[sim][sweep]") {
