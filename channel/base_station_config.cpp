@@ -58,7 +58,8 @@ template <class V>
 void Visit(V& v, BaseStationConfig& c) {
   v("position_m", c.position_m, Rule::Range(-1e6, 1e6));
   v.Object("upa", c.upa);
-  v("carrier_ghz", c.carrier_ghz, Rule::Range(0.1, 1000.0));
+  // ITU-R P.838-3's range: the downlink's rain attenuation is defined there.
+  v("carrier_ghz", c.carrier_ghz, Rule::Range(1.0, 1000.0));
   v("boresight_az_deg", c.boresight_az_deg, Rule::Range(-360.0, 360.0));
   v("boresight_el_deg", c.boresight_el_deg, Rule::Range(-90.0, 90.0));
   // Like every tagged union in a scenario: the model first, then only its keys.

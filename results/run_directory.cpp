@@ -1,12 +1,58 @@
 #include "results/run_directory.h"
 
+#include <signal.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <filesystem>
+#include <fstream>
 #include <stdexcept>
 
 namespace uavsim::results {
 namespace fs = std::filesystem;
+
+bool ProcessAlive(pid_t pid) {
+  if (::kill(pid, 0) != 0 && errno == ESRCH) return false;
+  std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
+  std::string line;
+  if (!std::getline(stat, line)) return true;  // no /proc: trust kill()
+  const auto paren = line.rfind(')');
+  return paren == std::string::npos || paren + 2 >= line.size() || line[paren + 2] != 'Z';
+}
+
+std::optional<pid_t> StagingOwner(const std::string& folder_name, std::string* final_name) {
+  const auto at = folder_name.rfind(".partial-");
+  if (folder_name.size() < 2 || folder_name[0] != '.' || at == std::string::npos || at < 2)
+    return std::nullopt;
+  // ".NAME.partial-PID", or ".NAME.partial-PID.old" (a replaced run's
+  // remains while Commit swaps it out).
+  std::string digits = folder_name.substr(at + 9);
+  const auto end = digits.find_first_not_of("0123456789");
+  if (end != std::string::npos) {
+    if (digits.substr(end) != ".old") return std::nullopt;
+    digits.resize(end);
+  }
+  if (digits.empty() || digits.size() > 9) return std::nullopt;
+  if (final_name) *final_name = folder_name.substr(1, at - 1);
+  return static_cast<pid_t>(std::stol(digits));
+}
+
+std::size_t RemoveStaleStaging(const std::string& final_dir) {
+  const fs::path final_path(final_dir);
+  fs::path parent = final_path.parent_path();
+  if (parent.empty()) parent = ".";
+  const std::string name = final_path.filename().string();
+  std::size_t removed = 0;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(parent, ec)) {
+    std::string owner_of;
+    const auto pid = StagingOwner(e.path().filename().string(), &owner_of);
+    if (!pid || owner_of != name || *pid == ::getpid() || ProcessAlive(*pid)) continue;
+    std::error_code rm;
+    if (fs::remove_all(e.path(), rm) > 0 && !rm) ++removed;
+  }
+  return removed;
+}
 
 RunDirectory::RunDirectory(std::string final_dir, bool force)
     : final_dir_(std::move(final_dir)), force_(force) {
@@ -20,6 +66,7 @@ RunDirectory::RunDirectory(std::string final_dir, bool force)
   if (parent.empty()) parent = ".";
   fs::create_directories(parent, ec);
   if (ec) throw std::runtime_error(parent.string() + ": cannot create folder: " + ec.message());
+  RemoveStaleStaging(final_dir_);
   staging_dir_ =
       (parent / ("." + final_path.filename().string() + ".partial-" + std::to_string(::getpid())))
           .string();

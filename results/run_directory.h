@@ -2,9 +2,13 @@
 // staging directory beside the final one, each written to a temporary name
 // and renamed; Commit() renames the staging directory to its final name.
 // A run that throws or is killed never leaves its final directory behind
-// half-written (a killed run leaves only the hidden ".NAME.partial-PID").
+// half-written (a killed run leaves only the hidden ".NAME.partial-PID",
+// which the next RunDirectory for NAME removes once process PID is gone).
 #pragma once
 
+#include <sys/types.h>
+
+#include <optional>
 #include <string>
 
 #include "sim/core/atomic_file.h"
@@ -15,9 +19,24 @@ namespace uavsim::results {
 // Writes `content` to `path` atomically (sim/core/atomic_file.h).
 using core::WriteFileAtomic;
 
+// Whether `pid` is a live process of this host (a zombie is not).
+bool ProcessAlive(pid_t pid);
+
+// The process that made the staging folder named `folder_name`
+// (".NAME.partial-PID", or ".NAME.partial-PID.old" while Commit replaces an
+// old run), and NAME in *final_name; nothing for other names.
+std::optional<pid_t> StagingOwner(const std::string& folder_name, std::string* final_name);
+
+// Removes the staging folders ".NAME.partial-PID" beside `final_dir` (NAME
+// its last component) whose process is gone: what a run or a training
+// killed with SIGKILL left. Returns how many.
+std::size_t RemoveStaleStaging(const std::string& final_dir);
+
 class RunDirectory {
  public:
   // Throws core::UsageError if `final_dir` exists and `force` is false.
+  // Removes stale staging folders of the same name first
+  // (RemoveStaleStaging).
   RunDirectory(std::string final_dir, bool force);
   ~RunDirectory();  // removes the staging directory unless committed
   RunDirectory(const RunDirectory&) = delete;

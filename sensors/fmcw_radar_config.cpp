@@ -76,6 +76,25 @@ void Visit(V& v, FmcwRadarConfig& c) {
   v("rain_clutter_eta_exponent", c.rain_clutter_eta_exponent, Rule::Range(0.1, 3.0));
   v("rain_clutter_min_range_m", c.rain_clutter_min_range_m, Rule::Positive(1000.0));
   v.Object("processing", c.processing);
+  // The processing chain's preconditions (sensors/radar_processor.h), here
+  // so that validate refuses what run could not process.
+  const RadarProcessingConfig& p = c.processing;
+  const int range_window = 2 * (p.cfar_guard_range_cells + p.cfar_training_range_cells) + 1;
+  const int doppler_window = 2 * (p.cfar_guard_doppler_cells + p.cfar_training_doppler_cells) + 1;
+  v.Check(range_window <= c.adc_samples, "adc_samples",
+          "the CFAR window of processing (2 (cfar_guard_range_cells + cfar_training_range_cells) "
+          "+ 1 = " +
+              std::to_string(range_window) + " range cells) exceeds adc_samples (" +
+              std::to_string(c.adc_samples) + ")");
+  v.Check(doppler_window <= c.chirps_per_frame, "chirps_per_frame",
+          "the CFAR window of processing (2 (cfar_guard_doppler_cells + "
+          "cfar_training_doppler_cells) + 1 = " +
+              std::to_string(doppler_window) + " Doppler cells) exceeds chirps_per_frame (" +
+              std::to_string(c.chirps_per_frame) + ")");
+  v.Check(p.source_count != SourceCount::kMdl || p.max_sources < c.nx * c.ny, "processing",
+          "max_sources (" + std::to_string(p.max_sources) +
+              ") must be below the array's nx * ny = " + std::to_string(c.nx * c.ny) +
+              " elements for source_count \"mdl\"");
 }
 UAVSIM_INSTANTIATE_VISIT(FmcwRadarConfig);
 

@@ -5,6 +5,9 @@
 #include <filesystem>
 #include <set>
 
+#include "sim/core/rng.h"
+#include "sim/core/world_geometry.h"
+
 namespace uavsim::sim {
 
 using core::ConfigError;
@@ -185,6 +188,26 @@ void CheckScenario(const Scenario& s, const std::string& file) {
                             "\" in /links (known: " + (known.empty() ? "none" : known) + ")");
     }
   }
+  // The camera pre-processing's stereo search spans disparities up to
+  // f b / stereo_min_range_m (pipeline/node/camera_preprocessor.h): more than
+  // the rectified image is wide cannot be searched.
+  const auto& cam = s.pipeline.preprocess.camera;
+  for (std::size_t i = 0; i < s.nodes.size(); ++i) {
+    const sensors::SensorConfig& sensor = s.nodes[i].sensor;
+    if (sensor.type != sensors::SensorType::kFisheyeStereo || cam.raw || s.pipeline.preprocess.raw)
+      continue;
+    const double f = cam.rectified_focal_px ? *cam.rectified_focal_px
+                                            : sensor.fisheye.fx_px / (1.0 + sensor.fisheye.xi);
+    const double least_m = f * sensor.fisheye.baseline_m / cam.rectified_width_px;
+    if (cam.stereo_min_range_m < least_m)
+      throw ConfigError(file, "/pipeline/preprocess/camera/stereo_min_range_m",
+                        "expected at least " + core::FormatNumber(least_m) + " m for node \"" +
+                            s.nodes[i].id +
+                            "\" (nearer, its disparity f b / range would exceed the rectified "
+                            "width of " +
+                            std::to_string(cam.rectified_width_px) + " px), got " +
+                            core::FormatNumber(cam.stereo_min_range_m));
+  }
   for (const auto& [name, link] : s.links) {
     if (!IsValidId(name))
       throw ConfigError(file, "/links/" + core::EscapePointerToken(name),
@@ -210,6 +233,13 @@ void CheckScenario(const Scenario& s, const std::string& file) {
     if (ext != ".obj" && ext != ".OBJ" && ext != ".ply" && ext != ".PLY")
       throw ConfigError(file, "/world/city/path",
                         "expected an .obj or .ply file, got \"" + s.world.city.path + "\"");
+    // Loaded and checked here (faces, finite and bounded vertices), so that
+    // validate refuses what run could not build; the line names the scenario.
+    try {
+      core::BuildWorldGeometry(s.world, s.base_dir, core::RngStream(s.seed, "world"));
+    } catch (const ConfigError& e) {
+      throw ConfigError(file, "/world/city/path", p.string() + ": " + e.message());
+    }
   }
   const ResourceEstimate e = EstimateResources(s);
   auto node_sensor = [](std::size_t i) { return "/nodes/" + std::to_string(i) + "/sensor"; };
@@ -243,10 +273,10 @@ void CheckScenario(const Scenario& s, const std::string& file) {
 
 }  // namespace
 
-void SetPointer(Json& doc, const std::string& pointer, const Json& value) {
+void SetPointer(Json& doc, const std::string& pointer, const Json& value, const std::string& file) {
   if (pointer.empty() || pointer[0] != '/')
-    throw ConfigError("--set", pointer, "expected a JSON pointer starting with /");
-  if (!doc.is_object()) throw ConfigError("--set", pointer, "the scenario is not a JSON object");
+    throw ConfigError(file, "", "--set " + pointer + ": expected a JSON pointer starting with /");
+  if (!doc.is_object()) throw ConfigError(file, "", "the document: is not a JSON object");
   Json* node = &doc;
   std::string at;
   std::size_t pos = 1;
@@ -258,16 +288,23 @@ void SetPointer(Json& doc, const std::string& pointer, const Json& value) {
       if (i + 1 < token.size() && (token[i + 1] == '0' || token[i + 1] == '1'))
         token.replace(i, 2, token[i + 1] == '0' ? "~" : "/");
       else
-        throw ConfigError("--set", pointer, "invalid escape in JSON pointer");
+        throw ConfigError(file, pointer, "invalid escape in JSON pointer (~0 or ~1 only)");
     }
     const bool last = slash == std::string::npos;
     at += "/" + core::EscapePointerToken(token);
     if (node->is_array()) {
       std::size_t idx = 0;
+      if (token.size() > 1 && token[0] == '0') {
+        const auto digit = token.find_first_not_of('0');
+        throw ConfigError(file, at,
+                          "array index \"" + token +
+                              "\" has a leading zero, which RFC 6901 forbids: write " +
+                              (digit == std::string::npos ? "0" : token.substr(digit)));
+      }
       if (token.empty() || token.find_first_not_of("0123456789") != std::string::npos ||
           token.size() > 6 || (idx = std::stoul(token)) >= node->size())
         throw ConfigError(
-            "--set", at,
+            file, at,
             "no such array element (the array has " + std::to_string(node->size()) +
                 " elements; the defaults of an array are not addressable, write it in the file)");
       node = &(*node)[idx];
@@ -279,7 +316,7 @@ void SetPointer(Json& doc, const std::string& pointer, const Json& value) {
       if (!node->contains(token)) (*node)[token] = Json::object();
       node = &(*node)[token];
     } else {
-      throw ConfigError("--set", at, "cannot descend into " + core::DescribeValue(*node));
+      throw ConfigError(file, at, "cannot descend into " + core::DescribeValue(*node));
     }
     if (last) {
       *node = value;
@@ -289,10 +326,10 @@ void SetPointer(Json& doc, const std::string& pointer, const Json& value) {
   }
 }
 
-void ApplyOverride(Json& doc, const std::string& assignment) {
+void ApplyOverride(Json& doc, const std::string& assignment, const std::string& file) {
   const auto eq = assignment.find('=');
   if (assignment.empty() || assignment[0] != '/' || eq == std::string::npos)
-    throw ConfigError("--set", assignment, "expected /json/pointer=value");
+    throw ConfigError(file, "", "--set " + assignment + ": expected /json/pointer=value");
   const std::string text = assignment.substr(eq + 1);
   Json value;
   try {
@@ -300,10 +337,13 @@ void ApplyOverride(Json& doc, const std::string& assignment) {
   } catch (const Json::exception&) {
     value = text;  // a bare word such as orbit
   }
-  SetPointer(doc, assignment.substr(0, eq), value);
+  SetPointer(doc, assignment.substr(0, eq), value, file);
 }
 
 Scenario ScenarioFromJson(const Json& doc, const std::string& file, const std::string& base_dir) {
+  if (!doc.is_object())
+    throw ConfigError(file, "",
+                      "the document: expected an object, got " + core::DescribeValue(doc));
   Scenario s;
   s.base_dir = base_dir;
   core::FromJson(doc, file, "", s);
@@ -311,9 +351,37 @@ Scenario ScenarioFromJson(const Json& doc, const std::string& file, const std::s
   return s;
 }
 
+namespace {
+
+// Whether the override `pointer` sets `target` (itself or an enclosing value).
+bool Covers(const std::string& pointer, const std::string& target) {
+  return target.compare(0, pointer.size(), pointer) == 0 &&
+         (target.size() == pointer.size() || target[pointer.size()] == '/');
+}
+
+// Paths given on the command line resolve against the working directory,
+// paths written in the file against the file's folder: a relative path that
+// an override set is made absolute here, before the scenario's folder is
+// joined to it.
+void ResolveCommandLinePaths(Json& doc, const std::vector<std::string>& overrides) {
+  for (const char* target : {"/pipeline/model", "/world/city/path"}) {
+    bool set = false;
+    for (const std::string& o : overrides) set = set || Covers(o.substr(0, o.find('=')), target);
+    const Json::json_pointer at(target);
+    if (!set || !doc.contains(at) || !doc.at(at).is_string()) continue;
+    const std::string value = doc.at(at).get<std::string>();
+    if (value.empty() || (std::string(target) == "/pipeline/model" && value == "default")) continue;
+    if (std::filesystem::path(value).is_relative())
+      doc.at(at) = std::filesystem::absolute(value).lexically_normal().string();
+  }
+}
+
+}  // namespace
+
 Scenario LoadScenario(const std::string& path, const std::vector<std::string>& overrides) {
   Json doc = core::LoadJsonFile(path);
-  for (const auto& o : overrides) ApplyOverride(doc, o);
+  for (const auto& o : overrides) ApplyOverride(doc, o, path);
+  ResolveCommandLinePaths(doc, overrides);
   const std::string base = std::filesystem::path(path).parent_path().string();
   return ScenarioFromJson(doc, path, base.empty() ? "." : base);
 }

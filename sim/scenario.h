@@ -120,14 +120,20 @@ constexpr double kMaxFrameBytes = 2.0 * (1ull << 30);
 
 // Applies one "--set /json/pointer=value" to a document. The value is parsed
 // as JSON when it is valid JSON, else taken as a string. Missing objects on
-// the way are created; array indices must exist. Throws ConfigError.
-void ApplyOverride(core::Json& doc, const std::string& assignment);
+// the way are created; array indices must exist, written without leading
+// zeros (RFC 6901). Throws ConfigError "FILE: /pointer: ..." naming `file`,
+// the document the override applies to.
+void ApplyOverride(core::Json& doc, const std::string& assignment,
+                   const std::string& file = "--set");
 // The same with the value given as JSON.
-void SetPointer(core::Json& doc, const std::string& pointer, const core::Json& value);
+void SetPointer(core::Json& doc, const std::string& pointer, const core::Json& value,
+                const std::string& file = "--set");
 
 // Loads `path`, applies the overrides, fills the struct and checks every rule
-// including cross-references, referenced files (relative to the scenario's
-// folder) and the resource guard. Throws ConfigError.
+// including cross-references, referenced files and the resource guard.
+// Relative paths (/pipeline/model, /world/city/path) resolve against the
+// scenario's folder when the file gives them and against the working
+// directory when an override does. Throws ConfigError.
 Scenario LoadScenario(const std::string& path, const std::vector<std::string>& overrides = {});
 // The same from a document already in memory; `file` names it in messages and
 // `base_dir` resolves relative paths.

@@ -129,31 +129,15 @@ void PrepareDir(const std::string& dir, const Json& record) {
   results::WriteFileAtomic(file.string(), record.dump(2) + "\n");
 }
 
-// Whether `pid` is a live process of this host (a zombie is not).
-bool ProcessAlive(pid_t pid) {
-  if (::kill(pid, 0) != 0 && errno == ESRCH) return false;
-  std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
-  std::string line;
-  if (!std::getline(stat, line)) return true;  // no /proc: trust kill()
-  const auto paren = line.rfind(')');
-  return paren == std::string::npos || paren + 2 >= line.size() || line[paren + 2] != 'Z';
-}
-
 // Removes the staging folders ".ID.partial-PID" of points killed mid-way
 // (those whose process is gone), among the points this invocation runs:
 // another shard's points may be in the making on another host.
 void RemoveStalePartials(const std::string& dir, const std::set<std::string>& ours) {
   std::error_code ec;
   for (const auto& e : fs::directory_iterator(fs::path(dir) / "points", ec)) {
-    const std::string name = e.path().filename().string();
-    const auto at = name.find(".partial-");
-    if (name.empty() || name[0] != '.' || at == std::string::npos) continue;
-    if (!ours.count(name.substr(1, at - 1))) continue;
-    const std::string pid_text = name.substr(at + 9);
-    const auto digits = pid_text.substr(0, pid_text.find_first_not_of("0123456789"));
-    if (digits.empty() || digits.size() > 9) continue;
-    const pid_t pid = static_cast<pid_t>(std::stol(digits));
-    if (ProcessAlive(pid)) continue;
+    std::string id;
+    const auto pid = results::StagingOwner(e.path().filename().string(), &id);
+    if (!pid || !ours.count(id) || results::ProcessAlive(*pid)) continue;
     std::error_code rm;
     fs::remove_all(e.path(), rm);
   }

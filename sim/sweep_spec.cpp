@@ -19,7 +19,7 @@ struct SpecReader {
   std::string file;
 
   [[noreturn]] void Fail(const std::string& at, const std::string& what) const {
-    throw ConfigError(file, at, what);
+    throw ConfigError(file, at, (at.empty() ? "the document: " : "") + what);
   }
   void Keys(const Json& j, const std::string& at, const std::set<std::string>& allowed) const {
     if (!j.is_object()) Fail(at, "expected an object, got " + core::DescribeValue(j));

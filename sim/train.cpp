@@ -285,8 +285,8 @@ pipeline::TrainingConfig ResolveTrainingConfig(bool quick, const std::string& co
                                                const std::vector<std::string>& overrides) {
   core::Json doc = core::Json::object();
   if (!config_file.empty()) doc = core::LoadJsonFile(config_file);
-  for (const std::string& o : overrides) ApplyOverride(doc, o);
   const std::string name = config_file.empty() ? "--config-set" : config_file;
+  for (const std::string& o : overrides) ApplyOverride(doc, o, name);
   return pipeline::TrainingConfigFromJson(doc, name, Defaults(quick).training);
 }
 

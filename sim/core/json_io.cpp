@@ -201,13 +201,28 @@ Json LoadJsonFile(const std::string& path) {
   if (::stat(path.c_str(), &st) != 0)
     throw ConfigError(path, "", std::string("cannot read file: ") + std::strerror(errno));
   if (S_ISDIR(st.st_mode)) throw ConfigError(path, "", "cannot read file: is a directory");
-  if (static_cast<std::size_t>(st.st_size) > kMaxFileBytes)
+  // Devices (/dev/zero), FIFOs and sockets never end or block: refused
+  // before they are opened.
+  if (!S_ISREG(st.st_mode))
     throw ConfigError(path, "",
-                      "file is " + std::to_string(st.st_size) + " bytes; the limit is " +
-                          std::to_string(kMaxFileBytes));
+                      "cannot read file: not a regular file (a device, FIFO or socket); JSON "
+                      "inputs are regular files of at most " +
+                          std::to_string(kMaxFileBytes >> 20) + " MiB");
+  const auto too_big = [&path](const std::string& size) {
+    return ConfigError(path, "",
+                       "file is " + size + " bytes; the limit is " + std::to_string(kMaxFileBytes) +
+                           " (" + std::to_string(kMaxFileBytes >> 20) + " MiB)");
+  };
+  if (static_cast<std::size_t>(st.st_size) > kMaxFileBytes)
+    throw too_big(std::to_string(st.st_size));
   std::ifstream in(path, std::ios::binary);
   if (!in) throw ConfigError(path, "", std::string("cannot read file: ") + std::strerror(errno));
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  // Read at most one byte past the limit: a file that grows meanwhile stays
+  // bounded.
+  std::string text(kMaxFileBytes + 1, '\0');
+  in.read(text.data(), static_cast<std::streamsize>(text.size()));
+  text.resize(static_cast<std::size_t>(in.gcount()));
+  if (text.size() > kMaxFileBytes) throw too_big("more than " + std::to_string(kMaxFileBytes));
   return ParseJsonText(text, path);
 }
 
@@ -226,16 +241,23 @@ const Json* JsonReader::Find(const char* key) {
   return it == node_.end() ? nullptr : &*it;
 }
 
+// The document itself has the empty pointer: messages about it say so.
+static std::string AboutDocument(const std::string& pointer) {
+  return pointer.empty() ? "the document: " : "";
+}
+
 void JsonReader::Fail(const char* key, const std::string& expected, const Json& got) const {
-  throw ConfigError(file_, key && *key ? Child(key) : pointer_,
-                    "expected " + expected + ", got " + DescribeValue(got));
+  const std::string at = key && *key ? Child(key) : pointer_;
+  throw ConfigError(file_, at,
+                    AboutDocument(at) + "expected " + expected + ", got " + DescribeValue(got));
 }
 
 void JsonReader::Check(bool ok, const char* key, const std::string& message) {
   // Held back until Finish: a misspelt key explains a broken rule better
   // than the rule does ({"from": 40, "too": 50} is about "too", not "to").
   if (!ok && !deferred_)
-    deferred_ = ConfigError(file_, key && *key ? Child(key) : pointer_, message);
+    deferred_ = ConfigError(file_, key && *key ? Child(key) : pointer_,
+                            AboutDocument(key && *key ? Child(key) : pointer_) + message);
 }
 
 void JsonReader::CheckSize(const char* key, std::size_t n, std::size_t min_size,

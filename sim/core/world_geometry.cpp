@@ -397,6 +397,12 @@ void CollectMeshes(const aiScene& scene, const aiNode& node, const aiMatrix4x4& 
     for (unsigned f = 0; f < in.mNumFaces; ++f) {
       const aiFace& face = in.mFaces[f];
       if (face.mNumIndices != 3) continue;  // points and lines of mixed files
+      for (unsigned k = 0; k < 3; ++k)
+        if (face.mIndices[k] >= in.mNumVertices)
+          throw ConfigError(file, "/world/city/path",
+                            "face " + std::to_string(f) + " of mesh \"" + out.name +
+                                "\" refers to vertex " + std::to_string(face.mIndices[k]) + " of " +
+                                std::to_string(in.mNumVertices));
       out.triangles.push_back(
           {face.mIndices[0], face.mIndices[mirrored ? 2 : 1], face.mIndices[mirrored ? 1 : 2]});
     }
@@ -409,6 +415,11 @@ void CollectMeshes(const aiScene& scene, const aiNode& node, const aiMatrix4x4& 
         throw ConfigError(file, "/world/city/path",
                           "vertex " + std::to_string(v) + " of mesh \"" + out.name +
                               "\" is not finite after scale and offset");
+      // Embree works in float: beyond 1e6 m its hits lose centimetres.
+      if (q.cwiseAbs().maxCoeff() > 1e6f)
+        throw ConfigError(file, "/world/city/path",
+                          "vertex " + std::to_string(v) + " of mesh \"" + out.name +
+                              "\" lies more than 1e6 m from the origin after scale and offset");
       out.vertices_m.push_back(q);
     }
     world.meshes.push_back(std::move(out));
@@ -426,7 +437,8 @@ void ImportMesh(const CityConfig& city, const std::string& base_dir, WorldGeomet
   Assimp::Importer importer;
   const aiScene* scene = nullptr;
   try {
-    scene = importer.ReadFile(file, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices);
+    scene = importer.ReadFile(file, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
+                                        aiProcess_ValidateDataStructure);
   } catch (const std::exception& e) {
     throw ConfigError(file, pointer, std::string("cannot read the mesh: ") + e.what());
   }

@@ -1,5 +1,8 @@
 #include "results/run_directory.h"
 
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <catch2/catch.hpp>
 #include <filesystem>
 
@@ -61,4 +64,38 @@ TEST_CASE("CsvTable: fixed formatting without negative zero", "[results]") {
   CHECK(t.str() == "a,b\n0.000,2.50\n");
   CHECK(t.rows() == 1);
   CHECK_THROWS(t.AddRow({"1"}));
+}
+
+TEST_CASE("RunDirectory: staging folders of dead processes are removed, live ones kept",
+          "[results]") {
+  // What a run or a training killed with SIGKILL leaves: ".NAME.partial-PID"
+  // (issue 24: no later command removed them).
+  const std::string dir = uavsim::testing::TempDir("stale");
+  const pid_t child = fork();
+  if (child == 0) _exit(0);
+  int status = 0;
+  waitpid(child, &status, 0);  // now a PID of no live process
+  const std::string dead = dir + "/.run.partial-" + std::to_string(child);
+  const std::string dead_old = dir + "/.run.partial-" + std::to_string(child) + ".old";
+  const std::string live = dir + "/.run.partial-" + std::to_string(getppid());
+  const std::string other = dir + "/.other.partial-" + std::to_string(child);
+  for (const auto& d : {dead, dead_old, live, other}) fs::create_directories(d + "/sub");
+  CHECK(uavsim::results::ProcessAlive(getppid()));
+  CHECK_FALSE(uavsim::results::ProcessAlive(child));
+  std::string name;
+  CHECK(uavsim::results::StagingOwner(".run.partial-42", &name) == 42);
+  CHECK(name == "run");
+  CHECK(uavsim::results::StagingOwner(".run.partial-42.old", &name) == 42);
+  CHECK_FALSE(uavsim::results::StagingOwner("run.partial-42", &name));
+  CHECK_FALSE(uavsim::results::StagingOwner(".run.partial-", &name));
+  CHECK_FALSE(uavsim::results::StagingOwner(".run.partial-4x", &name));
+  {
+    RunDirectory run(dir + "/run", false);
+    CHECK_FALSE(fs::exists(dead));
+    CHECK_FALSE(fs::exists(dead_old));
+    CHECK(fs::exists(live));   // its process is alive: maybe another run in the making
+    CHECK(fs::exists(other));  // another name's
+  }
+  CHECK(uavsim::results::RemoveStaleStaging(dir + "/other") == 1);
+  CHECK_FALSE(fs::exists(other));
 }

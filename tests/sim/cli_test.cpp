@@ -1,6 +1,7 @@
 // The command-line contract of DESIGN.md, exercised through the built binary.
 #include <fcntl.h>
 #include <signal.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -8,6 +9,7 @@
 #include <catch2/catch.hpp>
 #include <chrono>
 #include <filesystem>
+#include <fstream>
 #include <sstream>
 #include <thread>
 #include <tuple>
@@ -89,6 +91,82 @@ TEST_CASE("CLI: validate accepts the default scenario and {} ", "[sim]") {
   auto missing = RunCli({"validate", dir + "/nope.json"});
   CHECK(missing.exit_code == 2);
   CHECK(missing.err == dir + "/nope.json: cannot read file: No such file or directory\n");
+}
+
+TEST_CASE(
+    "CLI: paths on the command line resolve against the working directory, in a file "
+    "against its folder",
+    "[sim]") {
+  // The README's `--set /pipeline/model=models/mine`, run from a folder that
+  // holds models/mine: it used to look for scenarios/models/mine (issue 24).
+  const std::string dir = TempDir("paths");
+  fs::create_directories(dir + "/models");
+  fs::copy(std::string(UAVSIM_SOURCE_DIR) + "/models/default", dir + "/models/mine",
+           fs::copy_options::recursive);
+  const auto from_cwd =
+      RunCli({"validate", kDefault, "--set", "/pipeline/model=models/mine", "--quiet"}, dir);
+  INFO(from_cwd.err);
+  CHECK(from_cwd.exit_code == 0);
+  // The same value from elsewhere names the file it looked for, absolute.
+  const auto elsewhere = RunCli(
+      {"validate", kDefault, "--set", "/pipeline/model=models/mine", "--quiet"}, dir + "/models");
+  CHECK(elsewhere.exit_code == 2);
+  CHECK_THAT(elsewhere.err,
+             Catch::Contains("/pipeline/model: file not found: " + dir + "/models/models/mine"));
+  // Written in a scenario file: against the file's folder, whatever the
+  // working directory.
+  fs::create_directories(dir + "/scen/m");
+  fs::copy(dir + "/models/mine", dir + "/scen/m", fs::copy_options::recursive);
+  WriteFile(dir + "/scen/s.json", R"({"pipeline": {"model": "m"}})");
+  CHECK(RunCli({"validate", dir + "/scen/s.json", "--quiet"}, "/").exit_code == 0);
+  // A mesh city given on the command line likewise.
+  WriteFile(dir + "/town.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  CHECK(RunCli({"validate", kDefault, "--set",
+                R"(/world/city={"type": "mesh", "path": "town.obj"})", "--quiet"},
+               dir)
+            .exit_code == 0);
+}
+
+TEST_CASE("CLI: inputs that are not regular files are refused at once, naming the limit", "[sim]") {
+  // /dev/zero used to be read until memory ran out, a FIFO to block until
+  // killed (issue 24). Scenario, sweep spec and training config alike.
+  const std::string dir = TempDir("special");
+  const std::string fifo = dir + "/fifo.json";
+  REQUIRE(mkfifo(fifo.c_str(), 0600) == 0);
+  WriteFile(dir + "/s.json", "{}");
+  for (const auto& args : std::vector<std::vector<std::string>>{
+           {"validate", "/dev/zero"},
+           {"validate", fifo},
+           {"run", "/dev/urandom", "--out", dir + "/r"},
+           {"sweep", fifo, "--out", dir + "/w"},
+           {"train", dir + "/s.json", "--config", "/dev/zero", "--out", dir + "/m"}}) {
+    const auto r = RunCli(args);
+    INFO(args[0] << " " << args[1] << ": " << r.err);
+    CHECK(r.exit_code == 2);
+    CHECK(CountLines(r.err) == 1);
+    CHECK_THAT(r.err, Catch::Contains(": cannot read file: not a regular file (a device, FIFO or "
+                                      "socket); JSON inputs are regular files of at most 64 MiB"));
+  }
+  CHECK(!fs::exists(dir + "/r"));
+  CHECK(!fs::exists(dir + "/m"));
+  // Over the limit: the size in the message.
+  {
+    std::ofstream big(dir + "/big.json");
+    big << std::string((64u << 20) + 1, ' ');
+  }
+  const auto big = RunCli({"validate", dir + "/big.json"});
+  CHECK(big.exit_code == 2);
+  CHECK(big.err == dir + "/big.json: file is 67108865 bytes; the limit is 67108864 (64 MiB)\n");
+  // The top-level value's errors say they are about the document.
+  WriteFile(dir + "/array.json", "[1]");
+  CHECK(RunCli({"validate", dir + "/array.json"}).err ==
+        dir + "/array.json: the document: expected an object, got an array of 1\n");
+  // --set errors name the scenario file, then the pointer.
+  const auto set = RunCli({"validate", kDefault, "--set", "/nodes/01/id=x"});
+  CHECK(set.exit_code == 2);
+  CHECK(set.err == kDefault +
+                       ": /nodes/01: array index \"01\" has a leading zero, which RFC "
+                       "6901 forbids: write 1\n");
 }
 
 TEST_CASE("CLI: run writes the run directory of DESIGN.md", "[sim]") {
@@ -335,11 +413,22 @@ TEST_CASE("CLI: a killed run leaves nothing under its final name", "[sim]") {
     CHECK_FALSE(fs::exists(out));
   }
   // After SIGTERM the staging folder is cleaned up too; after SIGKILL only a
-  // hidden .partial folder can remain.
+  // hidden .partial folder can remain, until the next run of that name.
+  const std::string killed_prefix = ".out" + std::to_string(SIGKILL) + ".partial-";
+  std::size_t stale = 0;
   for (auto& e : fs::directory_iterator(dir)) {
     const std::string name = e.path().filename().string();
     INFO(name);
-    CHECK((name == "long.json" ||
-           name.rfind(".out" + std::to_string(SIGKILL) + ".partial-", 0) == 0));
+    CHECK((name == "long.json" || name.rfind(killed_prefix, 0) == 0));
+    stale += name.rfind(killed_prefix, 0) == 0;
+  }
+  CHECK(stale == 1);
+  WriteFile(dir + "/short.json", R"({"duration_s": 0.5, "nodes": []})");
+  REQUIRE(RunCli({"run", dir + "/short.json", "--out", dir + "/out" + std::to_string(SIGKILL),
+                  "--quiet"})
+              .exit_code == 0);
+  for (auto& e : fs::directory_iterator(dir)) {
+    INFO(e.path());
+    CHECK(e.path().filename().string().rfind(killed_prefix, 0) != 0);
   }
 }
