@@ -4,6 +4,7 @@
 #include <stdexcept>
 #include <system_error>
 
+#include "pipeline/model_checksums.h"
 #include "sim/core/atomic_file.h"
 #include "sim/core/error.h"
 #include "sim/core/json_io.h"
@@ -68,9 +69,10 @@ void WriteModelManifest(const ModelManifest& m, const std::string& manifest_path
 std::unique_ptr<UavLocModelFiles> UavLocModelFiles::Load(const std::string& path) {
   auto files = std::make_unique<UavLocModelFiles>();
   files->manifest_path_ = ModelManifestPath(path);
+  const fs::path folder = fs::path(files->manifest_path_).parent_path();
+  VerifyModelChecksums(folder.empty() ? "." : folder.string());
   files->manifest_ = ReadModelManifest(files->manifest_path_);
   const ModelManifest& m = files->manifest_;
-  const fs::path folder = fs::path(files->manifest_path_).parent_path();
   const auto require = [&](const std::string& name, const char* key) {
     const fs::path p = folder / name;
     std::error_code ec;

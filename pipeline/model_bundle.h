@@ -7,6 +7,7 @@
 //   radar.json/.pt        the radar node's
 //   uavloc.pt/.pt.json    the edge network: TE-Align, MADW, MICA, Mamba (uavloc_model.h)
 //   training_report.json  losses per stage and held-out RMSE (written by the trainer)
+//   checksums.sha256      SHA-256 of every other file (pipeline/model_checksums.h)
 //
 // A model is addressed by its manifest or its folder. Torch-free header.
 #pragma once
@@ -57,7 +58,8 @@ void WriteModelManifest(const ModelManifest& m, const std::string& manifest_path
 // first.
 class UavLocModelFiles {
  public:
-  // Throws core::ConfigError naming the file for anything missing or
+  // Verifies the folder's checksums.sha256 first (a changed or corrupted
+  // file is refused). Throws core::ConfigError naming the file for anything missing or
   // malformed, or for a part whose latent size or modality does not match
   // the manifest.
   static std::unique_ptr<UavLocModelFiles> Load(const std::string& path);

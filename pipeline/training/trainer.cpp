@@ -10,6 +10,7 @@
 
 #include "pipeline/edge/te_align.h"
 #include "pipeline/edge/uavloc_model.h"
+#include "pipeline/model_checksums.h"
 #include "pipeline/node/ib_encoder.h"
 #include "pipeline/node/ib_model_io.h"
 #include "pipeline/node/ib_normalization.h"
@@ -641,6 +642,7 @@ TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& o, const ModelM
     if (!f) throw std::runtime_error(p.string() + ": cannot write");
   }
   WriteModelManifest(m, (out / "model.json").string());
+  WriteModelChecksums(out.string());  // last: over every file of the folder
   return report;
 }
 

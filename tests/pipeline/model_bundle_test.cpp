@@ -9,10 +9,12 @@
 
 #include "pipeline/edge/uavloc_model.h"
 #include "pipeline/model_bundle.h"
+#include "pipeline/model_checksums.h"
 #include "pipeline/node/ib_encoder.h"
 #include "pipeline/node/ib_model_io.h"
 #include "pipeline/torch_runtime.h"
 #include "sim/core/error.h"
+#include "sim/core/sha256.h"
 #include "test_support.h"
 
 namespace uavsim::pipeline {
@@ -169,6 +171,45 @@ TEST_CASE("ModelBundle: Load refuses parts whose latent size disagrees with the 
     CHECK_THAT(what, Catch::Contains(dir + "/lidar.json"));
     CHECK_THAT(what, Catch::Contains("/config/modality"));
   }
+}
+
+}  // namespace uavsim::pipeline
+
+namespace uavsim::pipeline {
+
+TEST_CASE("ModelBundle: checksums.sha256 is written over the folder and verified by Load",
+          "[pipeline]") {
+  InitTorch(1, 53);
+  const std::string dir = ModelFolder("bundle-checksums", 8, 8, 8);
+  // Without checksums (models of earlier versions): loads unchecked.
+  CHECK_NOTHROW(UavLocModelFiles::Load(dir));
+  WriteModelChecksums(dir);
+  const std::string sums = testing::ReadFile(dir + "/checksums.sha256");
+  // sha256sum's format, a line per other file, names sorted.
+  CHECK_THAT(sums, Catch::Contains("  camera.json\n"));
+  CHECK_THAT(sums, Catch::Contains(core::Sha256FileHex(dir + "/uavloc.pt") + "  uavloc.pt\n"));
+  CHECK(sums.find("checksums.sha256") == std::string::npos);
+  CHECK(sums.find("  camera.json\n") < sums.find("  model.json\n"));
+  CHECK_NOTHROW(UavLocModelFiles::Load(dir));
+
+  // One byte of the edge network's weights changed: refused, naming it.
+  std::string weights = testing::ReadFile(dir + "/uavloc.pt");
+  const std::string original = weights;
+  weights[weights.size() / 2] ^= 1;
+  testing::WriteFile(dir + "/uavloc.pt", weights);
+  CHECK_THAT(testing::ConfigErrorOf([&] { UavLocModelFiles::Load(dir); }),
+             Catch::StartsWith(dir + "/checksums.sha256: uavloc.pt has changed or is corrupted"));
+  testing::WriteFile(dir + "/uavloc.pt", original);
+  CHECK_NOTHROW(UavLocModelFiles::Load(dir));
+
+  // A listed file that is gone (after the folder's 9 files), and a line
+  // that is not "<hex>  <name>".
+  testing::WriteFile(dir + "/checksums.sha256", sums + std::string(64, '0') + "  gone.json\n");
+  CHECK(testing::ConfigErrorOf([&] { UavLocModelFiles::Load(dir); }) ==
+        dir + "/checksums.sha256: line 10: gone.json is missing");
+  testing::WriteFile(dir + "/checksums.sha256", "not a digest  uavloc.pt\n");
+  CHECK(testing::ConfigErrorOf([&] { UavLocModelFiles::Load(dir); }) ==
+        dir + "/checksums.sha256: line 1: expected \"<64 hex digits>  <file name>\"");
 }
 
 }  // namespace uavsim::pipeline

@@ -127,6 +127,35 @@ TEST_CASE(
             .exit_code == 0);
 }
 
+TEST_CASE("CLI: a model whose files changed since training is refused, naming the file", "[sim]") {
+  const std::string shipped = std::string(UAVSIM_SOURCE_DIR) + "/models/default";
+  // The shipped folder's checksums, checked by an independent implementation.
+  const std::string sha256sum = uavsim::testing::FindOnPath("sha256sum");
+  if (!sha256sum.empty()) {
+    const auto check =
+        uavsim::testing::RunProgram({sha256sum, "--check", "--quiet", "checksums.sha256"}, shipped);
+    INFO(check.out << check.err);
+    CHECK(check.exit_code == 0);
+  }
+  // 64 bytes changed inside camera.pt's tensor data used to run silently
+  // with other weights (issue 24: uavloc 1.03 m instead of 0.15 m).
+  const std::string dir = TempDir("corrupt");
+  fs::copy(shipped, dir + "/m", fs::copy_options::recursive);
+  std::string weights = ReadFile(dir + "/m/camera.pt");
+  REQUIRE(weights.size() > 4096);
+  for (std::size_t i = 0; i < 64; ++i) weights[weights.size() / 2 + i] ^= 0x5a;
+  WriteFile(dir + "/m/camera.pt", weights);
+  const auto r = RunCli({"run", kDefault, "--duration", "1", "--out", dir + "/run", "--quiet",
+                         "--set", "/pipeline/model=" + dir + "/m"});
+  CHECK(r.exit_code == 2);
+  CHECK(CountLines(r.err) == 1);
+  // "SCENARIO: /pipeline/model: MODEL/checksums.sha256: camera.pt has ...".
+  CHECK_THAT(r.err, Catch::StartsWith(kDefault + ": /pipeline/model: " + dir +
+                                      "/m/checksums.sha256: camera.pt has changed or is "
+                                      "corrupted since the model was written"));
+  CHECK(!fs::exists(dir + "/run"));
+}
+
 TEST_CASE("CLI: inputs that are not regular files are refused at once, naming the limit", "[sim]") {
   // /dev/zero used to be read until memory ran out, a FIFO to block until
   // killed (issue 24). Scenario, sweep spec and training config alike.

@@ -59,7 +59,7 @@ TEST_CASE("CLI: train --quick learns, is deterministic, and its model runs in th
   CHECK(r.out.empty());
   for (const char* f :
        {"model.json", "camera.json", "camera.pt", "lidar.json", "lidar.pt", "radar.json",
-        "radar.pt", "uavloc.pt", "uavloc.pt.json", "training_report.json"})
+        "radar.pt", "uavloc.pt", "uavloc.pt.json", "training_report.json", "checksums.sha256"})
     CHECK(fs::exists(model + "/" + f));
   CHECK_FALSE(fs::exists(model + "/checkpoints"));
   CHECK(fs::exists(data));
