@@ -253,6 +253,13 @@ Packets CountPackets(const RunData& d) {
   out.windows.resize(static_cast<std::size_t>(std::max(0L, windows)));
   for (std::size_t i = 0; i < t.rows.size(); ++i) {
     const std::string& modality = t.rows[i][static_cast<std::size_t>(mc)];
+    // Modality names go into a gnuplot data block (the bars' labels): plain
+    // names only, so that no cell can end the block and become a command.
+    if (modality.empty() || modality.size() > 64 ||
+        modality.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
+                                   "0123456789_-") != std::string::npos)
+      throw std::invalid_argument(t.name + ": line " + std::to_string(t.line[i]) +
+                                  ": a modality is 1 to 64 letters, digits, '_' or '-'");
     const double w = t.Number(i, wc);
     if (w < 0)
       throw std::invalid_argument(t.name + ": line " + std::to_string(t.line[i]) +
@@ -591,17 +598,20 @@ Figure PacketsFigure(const RunData& d, const Packets& p, const RunReportOptions&
       "Messages per modality by fate: delivered by its window's deadline, late (arrived after it: "
       "the pipeline treats it as missing), lost on the uplink, still in flight at the end.";
   std::ostringstream gp;
-  std::string rows;
-  for (const std::string& m : ModalityOrder(p)) {
-    const Reception& r = p.totals.at(m);
-    rows += m + " " + std::to_string(r.delivered) + " " + std::to_string(r.late) + " " +
-            std::to_string(r.lost) + " " + std::to_string(r.in_flight) + "\n";
+  // Labels as string expressions, data as numbers only (no name in a block).
+  std::string rows, tics;
+  const std::vector<std::string> order = ModalityOrder(p);
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    const Reception& r = p.totals.at(order[k]);
+    rows += std::to_string(k) + " " + std::to_string(r.delivered) + " " + std::to_string(r.late) +
+            " " + std::to_string(r.lost) + " " + std::to_string(r.in_flight) + "\n";
+    tics += (k ? ", " : "") + GnuplotString(order[k]) + " " + std::to_string(k);
   }
   gp << Block("packets", rows) << "set title 'Uplink messages by fate'\nset ylabel 'Messages'\n"
      << "set style data histograms\nset style histogram rowstacked\nset boxwidth 0.6\n"
      << "set style fill solid 1.0 border -1\nset yrange [0:*]\nset grid ytics\n"
-     << "set key outside right top\n"
-     << "plot $packets using 2:xtic(1) lc rgb '#1a9641' title 'delivered', "
+     << "set key outside right top\nset xtics (" << tics << ")\n"
+     << "plot $packets using 2 lc rgb '#1a9641' title 'delivered', "
      << "'' using 3 lc rgb '#fdae61' title 'late', '' using 4 lc rgb '#d7191c' title 'lost', "
      << "'' using 5 lc rgb '#969696' title 'in flight'\n";
   return Draw(d, o, png, caption, gp.str(), 640, 440, warnings);

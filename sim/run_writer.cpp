@@ -98,9 +98,11 @@ void WriteRunTables(results::RunDirectory& dir, const FinishedRun& run) {
 void WriteRunMetrics(results::RunDirectory& dir, const FinishedRun& run) {
   dir.WriteJson("metrics.json", Metrics(run));
   dir.WriteJson("manifest.json", Manifest(run));
-  const std::string staging = std::filesystem::path(dir.StagingPath("report.html")).parent_path();
-  for (const std::string& warning : results::WriteRunReport(staging))
-    if (!run.options.quiet) std::cerr << "uavsim: warning: report: " << warning << "\n";
+  if (run.options.report) {
+    const std::string staging = std::filesystem::path(dir.StagingPath("report.html")).parent_path();
+    for (const std::string& warning : results::WriteRunReport(staging))
+      if (!run.options.quiet) std::cerr << "uavsim: warning: report: " << warning << "\n";
+  }
   dir.Commit();
 }
 

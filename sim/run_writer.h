@@ -41,7 +41,8 @@ struct FinishedRun {
 // the end); t_arrival_s and latency_s empty unless it arrived.
 void WriteRunTables(results::RunDirectory& dir, const FinishedRun& run);
 // Then metrics.json (with the summary's wall times) and manifest.json, the
-// report (results/run_report.h: report.html, report/ and rate_snr.png;
+// report unless options.report is off (results/run_report.h: report.html,
+// report/ and rate_snr.png;
 // warns on stderr, unless quiet, for each figure gnuplot could not draw),
 // and commits the directory. Both throw std::runtime_error for I/O.
 void WriteRunMetrics(results::RunDirectory& dir, const FinishedRun& run);

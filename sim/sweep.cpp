@@ -183,6 +183,7 @@ ProcessFarm PointFarm(const SweepSpec& spec, const std::string& dir) {
     RunOptions o;
     o.out_dir = run_dir;
     o.quiet = true;
+    o.report = false;  // the sweep's report is the product; a point's is drawn on demand
     o.scenario_file = spec.file + "#" + spec.points[i].id;
     RunScenario(spec.points[i].scenario, o);
   };

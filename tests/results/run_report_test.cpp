@@ -190,5 +190,12 @@ TEST_CASE("Run report: refuses what is not a run directory, naming the file",
   WriteFile(dir + "/packets.csv",
             "t_capture_s,modality,window,status,latency_s\n0,camera,0,eaten,\n");
   CHECK_THROWS_WITH(WriteRunReport(dir), Catch::Contains("unknown status \"eaten\""));
+  // A cell that would end gnuplot's data block and run as a command.
+  WriteFile(dir + "/packets.csv",
+            "t_capture_s,modality,window,status,latency_s\n0,EOD,0,delivered,0.01\n"
+            "0,system('touch x'),0,delivered,0.01\n");
+  CHECK_THROWS_WITH(WriteRunReport(dir),
+                    Catch::Contains("line 2: a modality is 1 to 64 letters, digits, '_' or '-'") ||
+                        Catch::Contains("line 3: a modality is"));
   CHECK(!fs::exists(dir + "/report.html"));
 }
