@@ -13,6 +13,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "sim/core/interrupt.h"
 #include "sim/core/physical_constants.h"
 
 namespace uavsim::sensors {
@@ -787,6 +788,7 @@ RadarFrame RadarProcessor::Process(const RadarCube& cube, const Eigen::Isometry3
   frame.t_capture_s = t_capture_s;
   frame.cube_bytes = cube.RawBytes();
   for (const RadarDetection& det : detections) {
+    core::ThrowIfInterrupted();  // angle estimation is O(antennas^3) per detection
     for (const AngleOfArrival& d : EstimateAngles(Snapshots(rd, det))) {
       const Eigen::Vector3d u(std::cos(d.elevation_rad) * std::cos(d.azimuth_rad),
                               std::cos(d.elevation_rad) * std::sin(d.azimuth_rad),

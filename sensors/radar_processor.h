@@ -186,7 +186,8 @@ class RadarProcessor {
 
   // The whole chain. `X_WR` poses the radar in the world; t_capture_s is
   // the frame's start. Throws std::invalid_argument if the cube's shape is
-  // not the config's. frame.scatterers is left 0 (the caller knows it).
+  // not the config's, core::Interrupted on a termination request (polled per
+  // detection). frame.scatterers is left 0 (the caller knows it).
   RadarFrame Process(const RadarCube& cube, const Eigen::Isometry3d& X_WR,
                      double t_capture_s) const;
 

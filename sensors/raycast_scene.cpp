@@ -8,10 +8,14 @@
 #include <stdexcept>
 #include <string>
 
+#include "sim/core/interrupt.h"
+
 namespace uavsim::sensors {
 namespace {
 
 constexpr unsigned kStaticInstanceId = 0;
+// Rays cast between two looks at the termination flag.
+constexpr std::size_t kInterruptPollRays = 1024;
 
 // Embree reports errors through a C callback; throwing across it is not
 // allowed, so the message is kept and thrown by the next checked call.
@@ -297,6 +301,7 @@ void RaycastScene::IntersectPackets(bool static_only, const Ray* rays, RayHit* h
   alignas(32) RTCRayHit8 packet;
   alignas(32) int valid[8];
   for (std::size_t base = 0; base < count; base += 8) {
+    if (base % kInterruptPollRays == 0) core::ThrowIfInterrupted();
     const std::size_t n = std::min<std::size_t>(8, count - base);
     for (std::size_t i = 0; i < 8; ++i) {
       const Ray& r = rays[base + std::min(i, n - 1)];

@@ -76,7 +76,8 @@ class RaycastScene {
   // Closest hit along one ray (rtcIntersect1).
   RayHit Intersect(const Ray& ray) const;
   // Closest hits of many rays: coherent rays go through Embree's packet API
-  // (groups of 8); hits[i] answers rays[i].
+  // (groups of 8); hits[i] answers rays[i]. Polls termination requests every
+  // 1024 rays: throws core::Interrupted, leaving `hits` partly written.
   void IntersectMany(const Ray* rays, RayHit* hits, std::size_t count) const;
   // As IntersectMany, the same packets, against the static world alone (a
   // top level holding only its instance, built like the full one). For a

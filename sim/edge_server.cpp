@@ -6,6 +6,7 @@
 #include <iostream>
 
 #include "pipeline/anchored/geometric_anchor.h"
+#include "pipeline/model_checksums.h"
 #include "pipeline/torch_runtime.h"
 
 namespace uavsim::sim {
@@ -13,22 +14,48 @@ namespace {
 
 const char* const kModalities[] = {"camera", "lidar", "radar"};
 
+const char* const kHowToTrain =
+    "train one with `uavsim train SCENARIO.json --out DIR` and set /pipeline/model to DIR";
+
+// The manifest of the trained model the scenario names.
+std::string ModelPath(const Scenario& s) {
+  namespace fs = std::filesystem;
+  if (s.pipeline.model == "default") return pipeline::DefaultModelPath();
+  return pipeline::ModelManifestPath(
+      (fs::path(s.base_dir) / s.pipeline.model).lexically_normal().string());
+}
+
+void RequireModelFile(const std::string& file, const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec))
+    throw core::ConfigError(file, "/pipeline/model",
+                            "no trained model at " + path + ": " + kHowToTrain);
+}
+
+// The scenario's settings a model's manifest must agree with.
+void CheckManifestFits(const Scenario& s, const std::string& file, const std::string& path,
+                       const pipeline::ModelManifest& m) {
+  if (m.latent_dim != s.pipeline.latent_dim)
+    throw core::ConfigError(file, "/pipeline/latent_dim",
+                            "the model " + path + " sends latents of " +
+                                std::to_string(m.latent_dim) + " values, the scenario asks for " +
+                                std::to_string(s.pipeline.latent_dim) + ": " + kHowToTrain);
+  if (std::abs(m.window_s - s.pipeline.window_s) > 1e-12)
+    throw core::ConfigError(file, "/pipeline/window_s",
+                            "the model " + path + " was trained with " +
+                                core::FormatNumber(m.window_s) +
+                                " s windows, the scenario asks for " +
+                                core::FormatNumber(s.pipeline.window_s) + " s: " + kHowToTrain);
+}
+
 // The trained model a scenario names, loaded for the run loop. Throws
 // core::ConfigError naming the scenario's /pipeline/model when it is missing
 // or does not fit the scenario.
 std::unique_ptr<pipeline::UavLocModelFiles> LoadModel(const Scenario& s, const std::string& file,
                                                       bool quiet, core::Json& info) {
-  namespace fs = std::filesystem;
-  const bool is_default = s.pipeline.model == "default";
-  const std::string path =
-      is_default ? pipeline::DefaultModelPath()
-                 : pipeline::ModelManifestPath(
-                       (fs::path(s.base_dir) / s.pipeline.model).lexically_normal().string());
-  const std::string how =
-      "train one with `uavsim train SCENARIO.json --out DIR` and set /pipeline/model to DIR";
-  std::error_code ec;
-  if (!fs::is_regular_file(path, ec))
-    throw core::ConfigError(file, "/pipeline/model", "no trained model at " + path + ": " + how);
+  const std::string path = ModelPath(s);
+  const std::string how = kHowToTrain;
+  RequireModelFile(file, path);
   std::unique_ptr<pipeline::UavLocModelFiles> model;
   try {
     model = pipeline::UavLocModelFiles::Load(path);
@@ -36,17 +63,7 @@ std::unique_ptr<pipeline::UavLocModelFiles> LoadModel(const Scenario& s, const s
     throw core::ConfigError(file, "/pipeline/model", std::string(e.what()) + " (" + how + ")");
   }
   const pipeline::ModelManifest& m = model->manifest();
-  if (m.latent_dim != s.pipeline.latent_dim)
-    throw core::ConfigError(file, "/pipeline/latent_dim",
-                            "the model " + path + " sends latents of " +
-                                std::to_string(m.latent_dim) + " values, the scenario asks for " +
-                                std::to_string(s.pipeline.latent_dim) + ": " + how);
-  if (std::abs(m.window_s - s.pipeline.window_s) > 1e-12)
-    throw core::ConfigError(file, "/pipeline/window_s",
-                            "the model " + path + " was trained with " +
-                                core::FormatNumber(m.window_s) +
-                                " s windows, the scenario asks for " +
-                                core::FormatNumber(s.pipeline.window_s) + " s: " + how);
+  CheckManifestFits(s, file, path, m);
   const bool same_layout = m.layout_hash == LayoutHash(s);
   if (!same_layout && !quiet)
     std::cerr << "uavsim: warning: the model " << path << " was trained for scenario \""
@@ -85,6 +102,28 @@ std::unique_ptr<pipeline::Ekf> MakeEkf(const Scenario& s) {
 
 }  // namespace
 
+bool NeedsTrainedModel(const Scenario& s) {
+  const auto& m = s.pipeline.methods;
+  return std::any_of(m.begin(), m.end(), [](const std::string& method) {
+    return method == "uavloc" || method.rfind("uavloc_", 0) == 0;
+  });
+}
+
+void CheckTrainedModel(const Scenario& s, const std::string& file) {
+  if (!NeedsTrainedModel(s)) return;
+  const std::string path = ModelPath(s);
+  RequireModelFile(file, path);
+  pipeline::ModelManifest m;
+  try {
+    m = pipeline::ReadModelManifest(path);
+    pipeline::VerifyModelChecksums(std::filesystem::path(path).parent_path().string());
+  } catch (const core::ConfigError& e) {
+    throw core::ConfigError(file, "/pipeline/model",
+                            std::string(e.what()) + " (" + kHowToTrain + ")");
+  }
+  CheckManifestFits(s, file, path, m);
+}
+
 EdgeServer::EdgeServer(const Scenario& s, const std::string& scenario_file, bool quiet,
                        bool methods)
     : scenario_(s),
@@ -92,9 +131,7 @@ EdgeServer::EdgeServer(const Scenario& s, const std::string& scenario_file, bool
       window_ns_(core::Seconds(s.pipeline.window_s)) {
   if (!methods) return;
   if (Runs("ekf")) ekf_ = MakeEkf(s);
-  const bool any_uavloc =
-      Runs("uavloc") || Runs("uavloc_camera") || Runs("uavloc_lidar") || Runs("uavloc_radar");
-  if (!any_uavloc) return;
+  if (!NeedsTrainedModel(s)) return;
   pipeline::InitTorch(1, s.seed);
   uavloc_ = LoadModel(s, scenario_file, quiet, model_info_);
   uavloc_->edge().WaitForTrack(s.pipeline.uavloc_wait_for_track);

@@ -36,6 +36,17 @@
 
 namespace uavsim::sim {
 
+// Whether the scenario runs a method that needs a trained model (uavloc and
+// its single-modality ablations).
+bool NeedsTrainedModel(const Scenario& s);
+
+// What `validate` checks of that model without loading any weights: the
+// manifest exists and parses, the folder's checksums hold, and its latent
+// size and window length are the scenario's (the rules the run applies when
+// it loads the model). Nothing when no method needs one. Throws
+// core::ConfigError naming `file` and the scenario's pointer.
+void CheckTrainedModel(const Scenario& s, const std::string& file);
+
 class EdgeServer {
  public:
   // Builds the scenario's methods. With `methods` false (training-data

@@ -25,6 +25,7 @@
 #include "sim/bench_radar.h"
 #include "sim/bench_raycast.h"
 #include "sim/core/error.h"
+#include "sim/edge_server.h"
 #include "sim/run.h"
 #include "sim/scenario.h"
 #include "sim/sweep.h"
@@ -63,7 +64,8 @@ const char* kValidateHelp =
     "usage: uavsim validate SCENARIO.json [--set /json/pointer=value]... [--resolved] [--quiet]\n"
     "\n"
     "Checks SCENARIO.json strictly (unknown keys, types, ranges, references, files,\n"
-    "resource limits). Exit 0 if valid, else exit 2 with one line on stderr:\n"
+    "meshes, the trained model's manifest and checksums, resource limits: rays and\n"
+    "memory against this machine's). Exit 0 if valid, else exit 2 with one line on stderr:\n"
     "  FILE: /json/pointer: expected ..., got ...\n"
     "\n"
     "  --set P=V     override the value at JSON pointer P (V is JSON, or a bare string)\n"
@@ -259,6 +261,7 @@ int Validate(int argc, char** argv) {
   if (a.Has("--help")) return std::cout << kValidateHelp, kExitOk;
   const std::string& file = OneScenario("validate", a);
   const uavsim::sim::Scenario s = uavsim::sim::LoadScenario(file, Overrides(a));
+  uavsim::sim::CheckTrainedModel(s, file);
   if (a.Has("--resolved")) std::cout << uavsim::sim::ResolvedJson(s).dump(2) << "\n";
   if (!a.Has("--quiet") && !a.Has("--resolved")) {
     const auto e = uavsim::sim::EstimateResources(s);
@@ -319,6 +322,7 @@ int Run(int argc, char** argv) {
     }
   }
   const uavsim::sim::Scenario s = uavsim::sim::LoadScenario(file, overrides);
+  uavsim::sim::CheckTrainedModel(s, file);  // what validate checks, before anything is made
   o.out_dir = a.Value("--out").value_or("runs/" + s.name + "-s" + std::to_string(s.seed));
   const auto summary = uavsim::sim::RunScenario(s, o);
   if (!o.quiet) {
@@ -604,7 +608,7 @@ int Main(int argc, char** argv) {
 
 int main(int argc, char** argv) {
   try {
-    uavsim::sim::InstallInterruptHandlers();
+    uavsim::core::InstallInterruptHandlers();
     return Main(argc, argv);
   } catch (const uavsim::core::ConfigError& e) {
     std::cerr << e.what() << "\n";
@@ -612,7 +616,7 @@ int main(int argc, char** argv) {
   } catch (const UsageError& e) {
     std::cerr << e.what() << "\n";
     return kExitBadInput;
-  } catch (const uavsim::sim::Interrupted&) {
+  } catch (const uavsim::core::Interrupted&) {
     std::cerr << "uavsim: interrupted; nothing half-written is left under a final name\n";
     return kExitInterrupted;
   } catch (const std::bad_alloc&) {

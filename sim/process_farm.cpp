@@ -62,7 +62,7 @@ pid_t LaunchTask(const ProcessFarm& farm, std::size_t task, const std::string& d
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
                               static_cast<std::size_t>(threads));
     farm.run(task, dir);
-  } catch (const Interrupted&) {
+  } catch (const core::Interrupted&) {
     rc = 130;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "%s: %s: %s\n", farm.command.c_str(), farm.describe(task).c_str(),
@@ -121,9 +121,9 @@ class ChildPool {
   }
   // Stops everything if a termination signal arrived.
   void ThrowIfInterrupted() {
-    if (!InterruptRequested()) return;
+    if (!core::InterruptRequested()) return;
     KillAll();
-    throw Interrupted();
+    throw core::Interrupted();
   }
 
  private:
@@ -181,7 +181,7 @@ FarmCounts RunFarmLocal(const ProcessFarm& farm, std::deque<std::size_t> queue,
       busy = true;
       if (done->second == 130) {
         pool.KillAll();
-        throw Interrupted();
+        throw core::Interrupted();
       }
       done->second == 0 ? ++counts.ran : ++counts.failed;
       progress.Update(static_cast<double>(counts.ran + counts.failed));

@@ -1,7 +1,6 @@
 #include "sim/run.h"
 
 #include <chrono>
-#include <csignal>
 #include <ctime>
 #include <map>
 #include <memory>
@@ -11,6 +10,7 @@
 #include "channel/uplink.h"
 #include "results/csv.h"
 #include "results/run_directory.h"
+#include "sim/core/interrupt.h"
 #include "sim/core/periodic_process.h"
 #include "sim/core/progress.h"
 #include "sim/core/rng.h"
@@ -27,10 +27,6 @@
 
 namespace uavsim::sim {
 namespace {
-
-volatile std::sig_atomic_t g_interrupt = 0;
-
-extern "C" void OnSignal(int) { g_interrupt = 1; }
 
 std::string UtcNow() {
   const std::time_t now = std::time(nullptr);
@@ -158,20 +154,6 @@ RunSummary Summarize(const Scenario& s, const std::map<std::string, NodeTraffic>
 
 }  // namespace
 
-void InstallInterruptHandlers() {
-  struct sigaction sa {};
-  sa.sa_handler = OnSignal;
-  sigemptyset(&sa.sa_mask);
-  sigaction(SIGINT, &sa, nullptr);
-  sigaction(SIGTERM, &sa, nullptr);
-}
-
-void ThrowIfInterrupted() {
-  if (g_interrupt) throw Interrupted();
-}
-
-bool InterruptRequested() { return g_interrupt != 0; }
-
 // DESIGN.md's data flow: world -> sensing nodes -> uplinks -> edge server ->
 // window scoring (estimates, beams) -> run directory. Collecting training
 // data (o.collect) runs the same world, nodes and uplinks with a collector
@@ -229,14 +211,14 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
   bool interrupted = false;
   core::PeriodicProcess housekeeping(1.0, 0.0, [&](std::int64_t, core::SimTime t) {
     progress.Update(core::ToSeconds(t));
-    if (g_interrupt) interrupted = true, sim.Stop();
+    if (core::InterruptRequested()) interrupted = true, sim.Stop();
   });
   housekeeping.Start(sim, 0, t_end);
 
   // Building the world's BVH, loading the model, the nodes' set-up.
   profile.part("setup").seconds += wall_since_start();
   sim.RunUntil(t_end);
-  if (interrupted || g_interrupt) throw Interrupted();
+  if (interrupted || core::InterruptRequested()) throw core::Interrupted();
   progress.Finish();
 
   const auto traffic = TrafficByModality(nodes);

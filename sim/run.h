@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "pipeline/training/dataset.h"
+#include "sim/core/interrupt.h"
 #include "sim/core/json_io.h"
 #include "sim/scenario.h"
 
@@ -57,22 +58,8 @@ struct RunSummary {
 };
 
 // Throws core::UsageError (exists, not forced), std::runtime_error (I/O) or
-// Interrupted (SIGINT/SIGTERM during the run); the run directory then does not
+// core::Interrupted (SIGINT/SIGTERM during the run); the run directory then does not
 // exist under its final name.
 RunSummary RunScenario(const Scenario& scenario, const RunOptions& options);
-
-// Raised when a termination signal arrived during a run.
-struct Interrupted : std::runtime_error {
-  Interrupted() : std::runtime_error("interrupted") {}
-};
-
-// Installs SIGINT/SIGTERM handlers that ask a running simulation to stop.
-void InstallInterruptHandlers();
-
-// Throws Interrupted if a termination signal has arrived (for long work
-// outside the run loop, such as training).
-void ThrowIfInterrupted();
-// Whether a termination signal has arrived.
-bool InterruptRequested();
 
 }  // namespace uavsim::sim

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <set>
 
+#include "sim/core/machine.h"
 #include "sim/core/rng.h"
 #include "sim/core/world_geometry.h"
 
@@ -134,6 +135,31 @@ void Visit(V& v, Scenario& c) {
 }
 UAVSIM_INSTANTIATE_VISIT(Scenario);
 
+namespace {
+
+// Resident memory of a run beyond its nodes: the world's BVH, LibTorch and
+// the model, the libraries (the default run without its nodes' frames is
+// about 0.3 GB; NOTES.md).
+constexpr double kFixedRunBytes = 0.5e9;
+
+// A node's resident working set per byte of its raw frame: peak RSS growth
+// over raw frame size, measured on the default city (NOTES.md: LiDAR 1.05,
+// camera 19-21 (MOG2's per-pixel mixtures, rectification maps, the static
+// cache), radar 1.7), times a margin of about 1.5.
+double WorkingBytesPerRawByte(sensors::SensorType type) {
+  switch (type) {
+    case sensors::SensorType::kLidar:
+      return 1.6;
+    case sensors::SensorType::kFisheyeStereo:
+      return 32.0;
+    case sensors::SensorType::kFmcwRadar:
+      return 2.6;
+  }
+  return 32.0;
+}
+
+}  // namespace
+
 ResourceEstimate EstimateResources(const Scenario& s) {
   ResourceEstimate e;
   double max_node_rays_per_s = -1.0;
@@ -146,7 +172,12 @@ ResourceEstimate EstimateResources(const Scenario& s) {
       e.max_frame_rays = sensor.RaysPerFrame(), e.max_frame_rays_node = i;
     if (sensor.RawBytesPerFrame() > e.max_frame_bytes)
       e.max_frame_bytes = sensor.RawBytesPerFrame(), e.max_frame_node = i;
+    const double node_bytes = WorkingBytesPerRawByte(sensor.type) * sensor.RawBytesPerFrame();
+    e.memory_bytes += node_bytes;
+    if (node_bytes > e.max_node_memory_bytes)
+      e.max_node_memory_bytes = node_bytes, e.max_memory_node = i;
   }
+  e.memory_bytes += kFixedRunBytes;
   e.rays_total = e.rays_per_s * s.duration_s;
   return e;
 }
@@ -251,6 +282,13 @@ void CheckScenario(const Scenario& s, const std::string& file) {
     throw ConfigError(file, node_sensor(e.max_frame_node),
                       "refused: one raw frame would take " + Sci(e.max_frame_bytes) +
                           " bytes; the limit is " + Sci(kMaxFrameBytes));
+  const double machine_bytes = core::PhysicalMemoryBytes();
+  if (machine_bytes > 0.0 && e.memory_bytes > kMaxMemoryShare * machine_bytes)
+    throw ConfigError(file, node_sensor(e.max_memory_node),
+                      "refused: the run would need about " + Sci(e.memory_bytes) +
+                          " bytes of memory (this node " + Sci(e.max_node_memory_bytes) +
+                          "); the machine has " + Sci(machine_bytes) + ", of which a run may use " +
+                          Sci(kMaxMemoryShare * machine_bytes));
   if (e.rays_per_s > kMaxRaysPerSimSecond)
     throw ConfigError(file, node_sensor(e.max_rays_node),
                       "refused: the sensors would cast " + Sci(e.rays_per_s) +

@@ -108,6 +108,12 @@ struct ResourceEstimate {
   std::size_t max_frame_rays_node = 0;  // its node
   double max_frame_bytes = 0.0;         // the largest raw frame of any sensor
   std::size_t max_frame_node = 0;       // its node
+  // Resident memory the run would need, bytes: a fixed part (the world, the
+  // model, the libraries) plus each node's working set, a multiple of its
+  // raw frame measured per sensor type (NOTES.md) with a margin.
+  double memory_bytes = 0.0;
+  double max_node_memory_bytes = 0.0;  // the node needing the most
+  std::size_t max_memory_node = 0;     // its node
 };
 ResourceEstimate EstimateResources(const Scenario& s);
 
@@ -117,6 +123,8 @@ constexpr double kMaxRaysPerSimSecond = 2e9;
 constexpr double kMaxTruthRows = 1e7;
 constexpr double kMaxRaysPerRun = 2e12;
 constexpr double kMaxFrameBytes = 2.0 * (1ull << 30);
+// A run may not need more than this share of the machine's physical memory.
+constexpr double kMaxMemoryShare = 0.8;
 
 // Applies one "--set /json/pointer=value" to a document. The value is parsed
 // as JSON when it is valid JSON, else taken as a string. Missing objects on

@@ -294,7 +294,7 @@ SweepOutcome RunSweep(const SweepSpec& spec, const SweepOptions& o) {
       queue = PointsToRun(spec, o, out);
       add(RunFarmLocal(farm, std::move(queue), fo));
     }
-  } catch (const Interrupted&) {
+  } catch (const core::Interrupted&) {
     // Finished points are committed; under MPI the other ranks stop too.
     if (world) {
       std::cerr << "uavsim: interrupted; finished points are kept\n";

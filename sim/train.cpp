@@ -297,7 +297,7 @@ std::optional<pipeline::TrainReport> RunTraining(const Scenario& base, const Tra
   static_cast<pipeline::TrainingConfig&>(t) = c.training;
   t.seed = c.seed;
   t.quiet = c.quiet;
-  t.check_stop = ThrowIfInterrupted;
+  t.check_stop = core::ThrowIfInterrupted;
   t.latent_dim = base.pipeline.latent_dim;
   t.window_s = base.pipeline.window_s;
   if (c.mlp_bottleneck) t.bottleneck = pipeline::IbBottleneck::kMlp;

@@ -1,15 +1,18 @@
 #include "test_support.h"
 
 #include <fcntl.h>
+#include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <regex>
 #include <sstream>
 #include <stdexcept>
+#include <thread>
 
 #include "sim/core/error.h"
 
@@ -158,6 +161,74 @@ ReportReferences CheckReportReferences(const std::string& dir) {
     }
   }
   return out;
+}
+
+Background::Background(const std::vector<std::string>& args, const std::string& log) {
+  std::vector<std::string> copy = args;
+  copy.insert(copy.begin(), UAVSIM_CLI);
+  std::vector<char*> argv;
+  for (auto& a : copy) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  const std::string out = log + ".out", err = log + ".err";
+  pid_ = fork();
+  if (pid_ == 0) {
+    setpgid(0, 0);
+    sigset_t none;
+    sigemptyset(&none);
+    sigprocmask(SIG_SETMASK, &none, nullptr);
+    const int devnull = open("/dev/null", O_RDONLY);
+    dup2(devnull, STDIN_FILENO);
+    const int o = open(out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    const int e = open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    dup2(o, STDOUT_FILENO);
+    dup2(e, STDERR_FILENO);
+    execv(argv[0], argv.data());
+    _exit(127);
+  }
+  setpgid(pid_, pid_);  // whichever of parent and child gets here first
+}
+
+Background::~Background() {
+  if (!ended_) {
+    kill(-pid_, SIGKILL);
+    Wait();
+  }
+}
+
+bool Background::WaitFor(const std::function<bool()>& ready, double max_s) {
+  const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(max_s);
+  while (!Ended()) {
+    if (ready()) return true;
+    if (std::chrono::steady_clock::now() > until) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  return false;
+}
+
+bool Background::FreezeWhen(const std::function<bool()>& ready) {
+  while (WaitFor(ready)) {
+    kill(-pid_, SIGSTOP);
+    if (ready()) return true;
+    kill(-pid_, SIGCONT);
+  }
+  return false;
+}
+
+bool Background::Ended() {
+  int status = 0;
+  if (!ended_ && waitpid(pid_, &status, WNOHANG) == pid_) Reaped(status);
+  return ended_;
+}
+
+int Background::Wait() {
+  int status = 0;
+  if (!ended_ && waitpid(pid_, &status, 0) == pid_) Reaped(status);
+  return rc_;
+}
+
+void Background::Reaped(int status) {
+  ended_ = true;
+  rc_ = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
 }
 
 }  // namespace uavsim::testing

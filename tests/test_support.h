@@ -2,6 +2,8 @@
 // it says; temporary folders; the message of a ConfigError.
 #pragma once
 
+#include <sys/types.h>
+
 #include <Eigen/Core>
 #include <functional>
 #include <string>
@@ -42,6 +44,40 @@ struct ReportReferences {
   std::vector<std::string> small_pngs;
 };
 ReportReferences CheckReportReferences(const std::string& dir);
+
+// `uavsim ARGS...` started in the background as the leader of a process
+// group of its own (so the group is it and the processes it forks), its
+// output in `log`.out and `log`.err. The destructor kills the group if it is
+// still running.
+class Background {
+ public:
+  Background(const std::vector<std::string>& args, const std::string& log);
+  ~Background();
+  Background(const Background&) = delete;
+  Background& operator=(const Background&) = delete;
+
+  pid_t pid() const { return pid_; }
+
+  // Polls every 10 ms until `ready` holds; false if the process ended first
+  // or `max_s` seconds passed (a guard against hanging, not a measurement).
+  bool WaitFor(const std::function<bool()>& ready, double max_s = 300.0);
+
+  // Waits until `ready` holds, then stops the whole group (SIGSTOP) and
+  // checks again, so what is seen is what a kill finds; false as WaitFor.
+  bool FreezeWhen(const std::function<bool()>& ready);
+
+  // Whether it has ended (reaps it if so).
+  bool Ended();
+
+  // Waits for it; its exit code (128 + signal if killed).
+  int Wait();
+
+ private:
+  void Reaped(int status);
+  pid_t pid_ = -1;
+  bool ended_ = false;
+  int rc_ = -1;
+};
 
 // An axis-aligned box [lo, hi] as 12 outward-wound triangles.
 core::TriangleMesh BoxMesh(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi,

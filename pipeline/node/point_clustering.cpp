@@ -7,6 +7,8 @@
 #include <stdexcept>
 #include <utility>
 
+#include "sim/core/interrupt.h"
+
 namespace uavsim::pipeline {
 namespace {
 
@@ -52,9 +54,16 @@ DbscanClusters Dbscan(const std::vector<float>& coordinates, int dims, double ep
   std::vector<std::pair<std::uint32_t, float>> neighbours;
   std::vector<std::uint32_t> frontier;
 
+  // Termination requests are polled every 4096 neighbourhood searches.
+  std::size_t searches = 0;
+  auto search = [&](std::size_t point) {
+    if (++searches % 4096 == 0) core::ThrowIfInterrupted();
+    tree.radiusSearch(&coordinates[point * dims], eps_sq, neighbours, params);
+  };
+
   for (std::size_t i = 0; i < n; ++i) {
     if (out.label[i] != kUnvisited) continue;
-    tree.radiusSearch(&coordinates[i * dims], eps_sq, neighbours, params);
+    search(i);
     if (neighbours.size() < static_cast<std::size_t>(min_points)) {
       out.label[i] = DbscanClusters::kNoise;  // may still become a border point later
       continue;
@@ -75,7 +84,7 @@ DbscanClusters Dbscan(const std::vector<float>& coordinates, int dims, double ep
       if (out.label[q] != kUnvisited) continue;
       out.label[q] = id;
       ++out.size[id];
-      tree.radiusSearch(&coordinates[q * dims], eps_sq, neighbours, params);
+      search(q);
       if (neighbours.size() >= static_cast<std::size_t>(min_points))
         for (const auto& [j, d2] : neighbours)
           if (out.label[j] == kUnvisited || out.label[j] == DbscanClusters::kNoise)

@@ -3,7 +3,8 @@
 // subsampling that enforces PointObservation::kMaxPoints.
 //
 // Pure functions of their inputs: no randomness, no global state, the same
-// result for the same input on any thread count.
+// result for the same input on any thread count. Dbscan alone polls
+// termination requests (core::Interrupted) as it goes.
 #pragma once
 
 #include <cstddef>
@@ -25,7 +26,8 @@ struct DbscanClusters {
 // cluster's first core point appears; a border point reachable from two
 // clusters goes to the first one expanded. Neighbour queries: a nanoflann
 // k-d tree. Throws std::invalid_argument if coordinates.size() is not a
-// multiple of dims, dims < 1, eps <= 0 or min_points < 1.
+// multiple of dims, dims < 1, eps <= 0 or min_points < 1; core::Interrupted
+// on a termination request (polled every 4096 neighbour queries).
 DbscanClusters Dbscan(const std::vector<float>& coordinates, int dims, double eps, int min_points);
 
 // The ids of the `k` largest clusters, largest first; equal sizes go to the

@@ -22,6 +22,7 @@
 #include "sensors/fmcw_radar.h"
 #include "sensors/radar_image.h"
 #include "sim/core/error.h"
+#include "sim/core/interrupt.h"
 #include "sim/core/json_io.h"
 #include "sim/core/pose.h"
 #include "sim/core/rng.h"
@@ -800,4 +801,17 @@ TEST_CASE("FmcwRadar + RadarProcessor: a flying quadrotor over the ground is a p
     for (const auto& q : f.points)
       CHECK(std::abs(q.radial_velocity_mps) > 0.5 * p.velocity_bin_mps());
   }
+}
+
+TEST_CASE("RadarProcessor: a termination request stops processing between detections",
+          "[sensors]") {
+  const FmcwRadarConfig c;
+  const RadarProcessor p(c);
+  RngStream rng(5, "interrupt");
+  const RadarCube cube = ClosedFormCube(c, {{30.0, 4.0, 10.0, 5.0, -15.0}}, &rng);
+  REQUIRE_FALSE(p.Process(cube, Eigen::Isometry3d::Identity(), 0.0).points.empty());
+  uavsim::core::RequestInterrupt();
+  CHECK_THROWS_AS(p.Process(cube, Eigen::Isometry3d::Identity(), 0.0), uavsim::core::Interrupted);
+  uavsim::core::ClearInterrupt();
+  CHECK_FALSE(p.Process(cube, Eigen::Isometry3d::Identity(), 0.0).points.empty());
 }

@@ -5,6 +5,7 @@
 #include <cmath>
 #include "test_support.h"
 
+#include "sim/core/interrupt.h"
 #include "sim/core/rng.h"
 
 using uavsim::core::TriangleMesh;
@@ -89,6 +90,22 @@ TEST_CASE("RaycastScene: packets give exactly the single-ray answers", "[sensors
     }
   }
   CHECK(hits > 400);  // about half the random directions point down
+}
+
+TEST_CASE("RaycastScene: a termination request stops a batch of rays", "[sensors]") {
+  // Every sensor casts through IntersectMany, so this is where a SIGTERM
+  // reaches a capture in progress.
+  RaycastScene scene(GroundAndWall());
+  std::vector<Ray> rays(4096);
+  for (auto& r : rays) r.direction = {0.0f, 0.0f, -1.0f}, r.origin_m = {0.0f, 0.0f, 5.0f};
+  std::vector<uavsim::sensors::RayHit> hits(rays.size());
+  uavsim::core::RequestInterrupt();
+  CHECK_THROWS_AS(scene.IntersectMany(rays.data(), hits.data(), rays.size()),
+                  uavsim::core::Interrupted);
+  CHECK_FALSE(hits.front().hit());  // it stopped before casting
+  uavsim::core::ClearInterrupt();
+  scene.IntersectMany(rays.data(), hits.data(), rays.size());
+  CHECK(hits.back().t == Approx(5.0f));
 }
 
 TEST_CASE("RaycastScene: a moving object follows its pose function", "[sensors]") {

@@ -15,6 +15,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <functional>
+#include <random>
 #include <set>
 #include <sstream>
 #include <thread>
@@ -25,6 +26,7 @@
 
 namespace fs = std::filesystem;
 using uavsim::core::Json;
+using uavsim::testing::Background;
 using uavsim::testing::CliResult;
 using uavsim::testing::FindOnPath;
 using uavsim::testing::ReadFile;
@@ -145,86 +147,6 @@ bool IsPng(const std::string& path) {
   if (!fs::is_regular_file(path, ec)) return false;
   return ReadFile(path).rfind("\x89PNG\r\n\x1a\n", 0) == 0;
 }
-
-// `uavsim ARGS...` started in the background as the leader of a process
-// group of its own (so the group is it and the points it forks), its output
-// in `log`.out and `log`.err.
-class Background {
- public:
-  Background(const std::vector<std::string>& args, const std::string& log) {
-    std::vector<std::string> copy = args;
-    copy.insert(copy.begin(), UAVSIM_CLI);
-    std::vector<char*> argv;
-    for (auto& a : copy) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    const std::string out = log + ".out", err = log + ".err";
-    pid_ = fork();
-    if (pid_ == 0) {
-      setpgid(0, 0);
-      sigset_t none;
-      sigemptyset(&none);
-      sigprocmask(SIG_SETMASK, &none, nullptr);
-      const int devnull = open("/dev/null", O_RDONLY);
-      dup2(devnull, STDIN_FILENO);
-      const int o = open(out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-      const int e = open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-      dup2(o, STDOUT_FILENO);
-      dup2(e, STDERR_FILENO);
-      execv(argv[0], argv.data());
-      _exit(127);
-    }
-    setpgid(pid_, pid_);  // whichever of parent and child gets here first
-  }
-  ~Background() {
-    if (!ended_) {
-      kill(-pid_, SIGKILL);
-      Wait();
-    }
-  }
-  Background(const Background&) = delete;
-  Background& operator=(const Background&) = delete;
-
-  pid_t pid() const { return pid_; }
-
-  // Polls until `ready` holds; false if the process ended first or minutes
-  // passed.
-  bool WaitFor(const std::function<bool()>& ready) {
-    for (int i = 0; i < 30000 && !ended_; ++i) {
-      if (ready()) return true;
-      int status = 0;
-      if (waitpid(pid_, &status, WNOHANG) == pid_) Ended(status);
-      std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    }
-    return false;
-  }
-
-  // Waits until `ready` holds, then stops the whole group (SIGSTOP) and
-  // checks again, so what is seen is what a kill finds; false as WaitFor.
-  bool FreezeWhen(const std::function<bool()>& ready) {
-    while (WaitFor(ready)) {
-      kill(-pid_, SIGSTOP);
-      if (ready()) return true;
-      kill(-pid_, SIGCONT);
-    }
-    return false;
-  }
-
-  // Its exit code (128 + signal if killed).
-  int Wait() {
-    int status = 0;
-    if (!ended_ && waitpid(pid_, &status, 0) == pid_) Ended(status);
-    return rc_;
-  }
-
- private:
-  void Ended(int status) {
-    ended_ = true;
-    rc_ = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  }
-  pid_t pid_ = -1;
-  bool ended_ = false;
-  int rc_ = -1;
-};
 
 // The uninterrupted local sweep every other way of running is compared
 // with: loss p over a range (0.2, 0.3) times seeds 1 and 2, four points,
@@ -622,6 +544,40 @@ TEST_CASE("Sweep: a killed sweep resumes where it stopped, to the same tables", 
   CHECK_THAT(again.out, Catch::Contains("4 points: 0 run now, 4 already done"));
   CHECK(ReadFile(out + "/points/p0003/manifest.json") == manifest);
   CHECK(ReadFile(out + "/summary.csv") == ref.summary);
+}
+
+TEST_CASE("Sweep: killed at random moments, then resumed, it gives the same tables",
+          "[sim][sweep][kill]") {
+  const Reference& ref = Ref();
+  const std::string root = TempDir("sweep-random-kills");
+  const std::string out = root + "/out";
+  const std::vector<std::string> args{"sweep", ref.spec, "--out", out, "--jobs", "1", "--quiet"};
+  // The span of a whole sweep, to place the kills over it (not a measurement).
+  const auto start = std::chrono::steady_clock::now();
+  REQUIRE(
+      RunCli({"sweep", ref.spec, "--out", root + "/whole", "--jobs", "1", "--quiet"}).exit_code ==
+      0);
+  const double span_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::mt19937_64 rng(24);
+  std::uniform_real_distribution<double> moment(0.02, 0.6);
+  for (int k = 0; k < 3; ++k) {
+    const double at_s = moment(rng) * span_s;
+    INFO("kill " << k << " at " << at_s << " s of " << span_s << " s");
+    Background sweep(args, root + "/log" + std::to_string(k));
+    std::this_thread::sleep_for(std::chrono::duration<double>(at_s));
+    kill(-sweep.pid(), SIGKILL);
+    sweep.Wait();
+    CheckPointsWhole(out);  // nothing half-written under a final name
+    if (fs::exists(out + "/summary.csv")) CHECK(ReadFile(out + "/summary.csv") == ref.summary);
+  }
+  const CliResult resumed = RunCli(args);
+  INFO("resumed: " << resumed.out << resumed.err);
+  REQUIRE(resumed.exit_code == 0);
+  CHECK(PartialFolders(out).empty());
+  CHECK(FinishedPoints(out) == std::vector<std::string>{"p0000", "p0001", "p0002", "p0003"});
+  CHECK(ReadFile(out + "/summary.csv") == ref.summary);
+  CHECK(ReadFile(out + "/aggregate.csv") == ref.aggregate);
 }
 
 TEST_CASE("Sweep: SIGINT or SIGTERM stops a sweep with exit 130, keeping finished points",

@@ -8,6 +8,7 @@
 
 #include "pipeline/node/point_clustering.h"
 #include "pipeline/node/radar_preprocessor.h"
+#include "sim/core/interrupt.h"
 #include "sim/core/rng.h"
 
 namespace uavsim::pipeline {
@@ -219,4 +220,17 @@ TEST_CASE("LargestClusters and EvenlySpacedIndices", "[pipeline]") {
 }
 
 }  // namespace
+
+TEST_CASE("Dbscan: a termination request stops a large clustering", "[pipeline]") {
+  // 10 000 points on a line 0.1 apart: one cluster, 10 000 neighbour queries.
+  std::vector<float> xyz;
+  for (int i = 0; i < 10000; ++i) xyz.insert(xyz.end(), {0.1f * i, 0.0f, 0.0f});
+  uavsim::core::RequestInterrupt();
+  CHECK_THROWS_AS(Dbscan(xyz, 3, 0.15, 2), uavsim::core::Interrupted);
+  uavsim::core::ClearInterrupt();
+  const DbscanClusters all = Dbscan(xyz, 3, 0.15, 2);
+  REQUIRE(all.size.size() == 1);
+  CHECK(all.size[0] == 10000);
+}
+
 }  // namespace uavsim::pipeline

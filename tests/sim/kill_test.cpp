@@ -1,0 +1,169 @@
+// Killed and interrupted commands (issue 24): SIGKILL at random moments
+// leaves no half-written file under a final name, and the next command
+// leaves no staging folder; SIGTERM and SIGINT stop even a single heavy
+// capture promptly. (The sweep's own kill tests are in sweep_test.cpp.)
+#include <signal.h>
+
+#include <catch2/catch.hpp>
+#include <chrono>
+#include <filesystem>
+#include <random>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "test_support.h"
+
+namespace fs = std::filesystem;
+using uavsim::testing::Background;
+using uavsim::testing::ReadFile;
+using uavsim::testing::RunCli;
+using uavsim::testing::TempDir;
+
+namespace {
+const std::string kDefault = std::string(UAVSIM_SOURCE_DIR) + "/scenarios/default.json";
+
+// Every staging folder (".NAME.partial-PID") under `root`.
+std::vector<std::string> StagingFolders(const std::string& root) {
+  std::vector<std::string> found;
+  for (const auto& e : fs::recursive_directory_iterator(root))
+    if (e.path().filename().string().find(".partial-") != std::string::npos)
+      found.push_back(e.path().string());
+  return found;
+}
+
+bool HasStaging(const std::string& root) { return !StagingFolders(root).empty(); }
+
+// Runs `args` to the end, returning its wall seconds (used only to place the
+// kills over the command's whole span).
+double TimedRun(const std::vector<std::string>& args) {
+  const auto start = std::chrono::steady_clock::now();
+  const auto r = RunCli(args);
+  INFO(r.out << r.err);
+  REQUIRE(r.exit_code == 0);
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// Starts `args` `kills` times and SIGKILLs its process group at moments
+// drawn uniformly over (2 %, 98 %) of `span_s` from a fixed seed, calling
+// `after_kill` each time.
+void KillAtRandomMoments(const std::vector<std::string>& args, const std::string& log,
+                         double span_s, int kills, const std::function<void()>& after_kill) {
+  std::mt19937_64 rng(24);
+  std::uniform_real_distribution<double> moment(0.02, 0.98);
+  for (int k = 0; k < kills; ++k) {
+    const double at_s = moment(rng) * span_s;
+    INFO("kill " << k << " at " << at_s << " s of " << span_s << " s");
+    Background cmd(args, log + std::to_string(k));
+    std::this_thread::sleep_for(std::chrono::duration<double>(at_s));
+    kill(-cmd.pid(), SIGKILL);
+    const int rc = cmd.Wait();
+    CHECK((rc == 128 + SIGKILL || rc == 0));  // it may have finished just before
+    after_kill();
+  }
+}
+
+}  // namespace
+
+TEST_CASE("Kill: a run killed at random moments leaves no half-written run directory",
+          "[sim][kill]") {
+  const std::string dir = TempDir("kill-run");
+  const auto args = [&](const std::string& out) {
+    return std::vector<std::string>{"run", kDefault, "--duration", "2", "--out", out, "--quiet"};
+  };
+  const double span_s = TimedRun(args(dir + "/ref"));
+  const std::string out = dir + "/out";
+  KillAtRandomMoments(args(out), dir + "/log", span_s, 4, [&] {
+    // Committed whole by one rename, or not there at all.
+    if (fs::exists(out)) {
+      for (const char* f : {"metrics.json", "estimates.csv", "truth.csv", "report.html"})
+        CHECK(fs::is_regular_file(out + "/" + f));
+      fs::remove_all(out);
+    }
+  });
+  // The next command removes what the killed ones staged, and gives the
+  // reference run's estimates.
+  std::vector<std::string> next = args(out);
+  const auto r = RunCli(next);
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  CHECK_FALSE(HasStaging(dir));
+  CHECK(ReadFile(out + "/estimates.csv") == ReadFile(dir + "/ref/estimates.csv"));
+}
+
+TEST_CASE("Kill: training killed at random moments leaves no half-written model or data",
+          "[sim][kill][train]") {
+  const std::string dir = TempDir("kill-train");
+  // Three short episodes (training, validation, test), one epoch a stage:
+  // simulation and both stages are each a good share of the span.
+  const auto args = [&](const std::string& name) {
+    return std::vector<std::string>{"train",
+                                    kDefault,
+                                    "--quick",
+                                    "--episodes",
+                                    "3",
+                                    "--episode-s",
+                                    "3",
+                                    "--config-set",
+                                    "/stage1_max_epochs=1",
+                                    "--config-set",
+                                    "/stage2_max_epochs=1",
+                                    "--out",
+                                    dir + "/" + name,
+                                    "--data",
+                                    dir + "/" + name + ".bin",
+                                    "--quiet"};
+  };
+  const double span_s = TimedRun(args("ref"));
+  const std::string model = dir + "/out", data = dir + "/out.bin";
+  KillAtRandomMoments(args("out"), dir + "/log", span_s, 3, [&] {
+    // The episodes are written whole once simulated; the model folder is
+    // committed whole (its checksums hold) or not there.
+    if (fs::exists(data)) CHECK(ReadFile(data) == ReadFile(dir + "/ref.bin"));
+    if (fs::exists(model)) {
+      const auto v = RunCli({"validate", kDefault, "--set", "/pipeline/model=" + model});
+      INFO(v.err);
+      CHECK(v.exit_code == 0);
+      fs::remove_all(model);
+    }
+    fs::remove(data);
+  });
+  const auto r = RunCli(args("out"));
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  CHECK_FALSE(HasStaging(dir));
+  CHECK(ReadFile(model + "/uavloc.pt") == ReadFile(dir + "/ref/uavloc.pt"));
+}
+
+TEST_CASE("Kill: SIGTERM or SIGINT inside one heavy capture stops the run at once", "[sim][kill]") {
+  // One LiDAR frame of 1e8 beams, or radar angle estimation over a 4 x 256
+  // array: before the capture polled, the signal waited 38 to 111 s for the
+  // frame to end.
+  const std::string dir = TempDir("kill-heavy");
+  struct Heavy {
+    const char* set;
+    int sig;
+  };
+  for (const Heavy& h : {Heavy{"/nodes/1/sensor/points_per_s=1e9", SIGTERM},
+                         Heavy{"/nodes/2/sensor/ny=256", SIGINT}}) {
+    INFO(h.set << ", signal " << h.sig);
+    const std::string out = dir + "/out" + std::to_string(h.sig);
+    Background run({"run", kDefault, "--set", h.set, "--out", out, "--quiet"},
+                   dir + "/log" + std::to_string(h.sig));
+    REQUIRE(run.WaitFor([&] { return HasStaging(dir); }, 120.0));
+    // Well inside the first heavy frames (the set-up takes about a second).
+    std::this_thread::sleep_for(std::chrono::seconds(4));
+    REQUIRE_FALSE(run.Ended());
+    kill(run.pid(), h.sig);
+    const auto signalled = std::chrono::steady_clock::now();
+    // A guard against hanging, far above the second or so this takes.
+    const bool ended = run.WaitFor([] { return false; }, 30.0) || run.Ended();
+    const double after_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - signalled).count();
+    INFO("ended " << after_s << " s after the signal");
+    REQUIRE(ended);
+    CHECK(run.Wait() == 130);
+    CHECK_FALSE(fs::exists(out));
+    CHECK_FALSE(HasStaging(dir));
+  }
+}
