@@ -348,15 +348,16 @@ std::string ReadSpecName(const SpecReader& r, const Json& spec, const std::strin
 }  // namespace
 
 SweepSpec LoadSweepSpec(const std::string& path) {
-  const Json spec = core::LoadJsonFile(path);
+  const std::string dir = fs::path(path).parent_path().string();
+  return SweepSpecFromJson(core::LoadJsonFile(path), path, dir.empty() ? "." : dir);
+}
+
+SweepSpec SweepSpecFromJson(const Json& spec, const std::string& path,
+                            const std::string& spec_dir) {
   const SpecReader r{path};
   r.Keys(spec, "", {"name", "scenario", "set", "parameters", "seeds"});
   SweepSpec out;
   out.file = path;
-  const std::string spec_dir = [&] {
-    const std::string d = fs::path(path).parent_path().string();
-    return d.empty() ? std::string(".") : d;
-  }();
   out.name = ReadSpecName(r, spec, path);
   BaseScenario base = ReadBaseScenario(r, spec, path, spec_dir);
   const std::vector<Assignment> fixed = ApplyFixedSets(r, spec, base.json);

@@ -73,5 +73,10 @@ constexpr std::size_t kMaxSweepPoints = 100000;
 
 // Throws core::ConfigError naming the file and the spec's JSON pointer.
 SweepSpec LoadSweepSpec(const std::string& path);
+// The same from a document already in memory: `file` names it in messages
+// (and, without a "name", names the sweep by its stem); `base_dir` resolves a
+// base scenario given as a path.
+SweepSpec SweepSpecFromJson(const core::Json& spec, const std::string& file,
+                            const std::string& base_dir);
 
 }  // namespace uavsim::sim

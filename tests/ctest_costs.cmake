@@ -1,7 +1,7 @@
 # Scheduling hints for ctest -j on a fresh build (no Testing/ cost history):
 # the longest tests start first, so the one long test does not begin after
 # half the suite and finish alone. The costs are the seconds each took in
-# the last full run on the 2-core machine (BENCHMARKS.md); only the order
+# a clean-clone run of .ci/run on the 2-core machine (2026-12-02); only the order
 # matters. Included after the tests catch_discover_tests found. ctest
 # ignores a name that matches no test: keep these in step with the names.
 foreach(entry
