@@ -9,6 +9,7 @@ foreach(entry
     "Malformed battery: validate exits 2 with one line naming file, pointer and fault=130"
     "The default model: three modalities beat each single one on held-out trajectories=115"
     "CLI: train --jobs 2 and mpirun simulate the episodes one job does, byte for byte=90"
+    "Fuzz: the scenario and sweep-spec loaders under libFuzzer, ASan and UBSan=300"
     "Kill: training killed at random moments leaves no half-written model or data=80")
   string(FIND "${entry}" "=" at REVERSE)
   string(SUBSTRING "${entry}" 0 ${at} name)

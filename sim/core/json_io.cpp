@@ -2,6 +2,7 @@
 
 #include <sys/stat.h>
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -217,11 +218,15 @@ Json LoadJsonFile(const std::string& path) {
     throw too_big(std::to_string(st.st_size));
   std::ifstream in(path, std::ios::binary);
   if (!in) throw ConfigError(path, "", std::string("cannot read file: ") + std::strerror(errno));
-  // Read at most one byte past the limit: a file that grows meanwhile stays
-  // bounded.
-  std::string text(kMaxFileBytes + 1, '\0');
-  in.read(text.data(), static_cast<std::streamsize>(text.size()));
-  text.resize(static_cast<std::size_t>(in.gcount()));
+  // Read in blocks, at most one byte past the limit: a file that grows
+  // meanwhile stays bounded, and a small file costs a small buffer.
+  std::string text;
+  std::array<char, 1 << 16> block;
+  while (in && text.size() <= kMaxFileBytes) {
+    const std::size_t want = std::min(block.size(), kMaxFileBytes + 1 - text.size());
+    in.read(block.data(), static_cast<std::streamsize>(want));
+    text.append(block.data(), static_cast<std::size_t>(in.gcount()));
+  }
   if (text.size() > kMaxFileBytes) throw too_big("more than " + std::to_string(kMaxFileBytes));
   return ParseJsonText(text, path);
 }
