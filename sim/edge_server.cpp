@@ -54,13 +54,13 @@ void CheckManifestFits(const Scenario& s, const std::string& file, const std::st
 std::unique_ptr<pipeline::UavLocModelFiles> LoadModel(const Scenario& s, const std::string& file,
                                                       bool quiet, core::Json& info) {
   const std::string path = ModelPath(s);
-  const std::string how = kHowToTrain;
   RequireModelFile(file, path);
   std::unique_ptr<pipeline::UavLocModelFiles> model;
   try {
     model = pipeline::UavLocModelFiles::Load(path);
   } catch (const core::ConfigError& e) {
-    throw core::ConfigError(file, "/pipeline/model", std::string(e.what()) + " (" + how + ")");
+    throw core::ConfigError(file, "/pipeline/model",
+                            std::string(e.what()) + " (" + kHowToTrain + ")");
   }
   const pipeline::ModelManifest& m = model->manifest();
   CheckManifestFits(s, file, path, m);
@@ -68,7 +68,7 @@ std::unique_ptr<pipeline::UavLocModelFiles> LoadModel(const Scenario& s, const s
   if (!same_layout && !quiet)
     std::cerr << "uavsim: warning: the model " << path << " was trained for scenario \""
               << m.scenario << "\" with another world or node layout; its estimates may be poor ("
-              << how << ")\n";
+              << kHowToTrain << ")\n";
   info = {{"path", path},
           {"trained_for", m.scenario},
           {"same_layout", same_layout},

@@ -61,15 +61,19 @@ const char* kMainHelp =
     "exit codes: 0 ok, 1 failure while running, 2 bad input or usage, 130 interrupted\n";
 
 const char* kValidateHelp =
-    "usage: uavsim validate SCENARIO.json [--set /json/pointer=value]... [--resolved] [--quiet]\n"
+    "usage: uavsim validate SCENARIO.json [MORE.json]... [--set /json/pointer=value]...\n"
+    "                       [--resolved] [--quiet]\n"
     "\n"
-    "Checks SCENARIO.json strictly (unknown keys, types, ranges, references, files,\n"
+    "Checks each SCENARIO.json strictly (unknown keys, types, ranges, references, files,\n"
     "meshes, the trained model's manifest and checksums, resource limits: rays and\n"
-    "memory against this machine's). Exit 0 if valid, else exit 2 with one line on stderr:\n"
+    "memory against this machine's). Exit 0 if all are valid, else exit 2 with one line\n"
+    "on stderr per invalid file:\n"
     "  FILE: /json/pointer: expected ..., got ...\n"
     "\n"
-    "  --set P=V     override the value at JSON pointer P (V is JSON, or a bare string)\n"
+    "  --set P=V     override the value at JSON pointer P (V is JSON, or a bare string),\n"
+    "                in every file\n"
     "  --resolved    print the scenario with every default filled, as JSON, on stdout\n"
+    "                (one file only)\n"
     "  --quiet       print nothing on success\n";
 
 const char* kRunHelp =
@@ -259,17 +263,33 @@ int Validate(int argc, char** argv) {
   const ParsedArgs a =
       Parse("validate", argc, argv, 2, {"--set"}, {"--quiet", "--resolved", "--help"});
   if (a.Has("--help")) return std::cout << kValidateHelp, kExitOk;
-  const std::string& file = OneScenario("validate", a);
-  const uavsim::sim::Scenario s = uavsim::sim::LoadScenario(file, Overrides(a));
-  uavsim::sim::CheckTrainedModel(s, file);
-  if (a.Has("--resolved")) std::cout << uavsim::sim::ResolvedJson(s).dump(2) << "\n";
-  if (!a.Has("--quiet") && !a.Has("--resolved")) {
-    const auto e = uavsim::sim::EstimateResources(s);
-    std::printf("%s: ok (%zu UAV%s, %zu node%s, %g s simulated, %.3g rays per simulated second)\n",
-                file.c_str(), s.uavs.size(), s.uavs.size() == 1 ? "" : "s", s.nodes.size(),
-                s.nodes.size() == 1 ? "" : "s", s.duration_s, e.rays_per_s);
+  if (a.positional.empty())
+    throw UsageError("uavsim validate: expected a scenario file (see uavsim validate --help)");
+  if (a.Has("--resolved") && a.positional.size() != 1)
+    throw UsageError("uavsim validate: --resolved prints one scenario: give one file");
+  // Each file on its own: a bad one gets its line on stderr and the rest are
+  // still checked; the exit code is 2 if any was bad.
+  int exit_code = kExitOk;
+  for (const std::string& file : a.positional) {
+    try {
+      const uavsim::sim::Scenario s = uavsim::sim::LoadScenario(file, Overrides(a));
+      uavsim::sim::CheckTrainedModel(s, file);
+      if (a.Has("--resolved")) std::cout << uavsim::sim::ResolvedJson(s).dump(2) << "\n";
+      if (!a.Has("--quiet") && !a.Has("--resolved")) {
+        const auto e = uavsim::sim::EstimateResources(s);
+        std::printf(
+            "%s: ok (%zu UAV%s, %zu node%s, %g s simulated, %.3g rays per simulated second)\n",
+            file.c_str(), s.uavs.size(), s.uavs.size() == 1 ? "" : "s", s.nodes.size(),
+            s.nodes.size() == 1 ? "" : "s", s.duration_s, e.rays_per_s);
+        std::fflush(stdout);
+      }
+    } catch (const uavsim::core::ConfigError& e) {
+      if (a.positional.size() == 1) throw;
+      std::cerr << e.what() << std::endl;
+      exit_code = kExitBadInput;
+    }
   }
-  return kExitOk;
+  return exit_code;
 }
 
 // Where the time went, on a terminal: the three largest parts of the
@@ -509,7 +529,7 @@ int Sweep(int argc, char** argv) {
     o.shard_index = std::stoi(i);
     o.shard_count = std::stoi(n);
   }
-  const uavsim::sim::SweepSpec spec = uavsim::sim::LoadSweepSpec(a.positional[0]);
+  const uavsim::sim::SweepSpec spec = uavsim::sim::LoadSweepSpec(a.positional[0], quiet);
   o.out_dir = a.Value("--out").value_or("runs/" + spec.name);
   const auto r = uavsim::sim::RunSweep(spec, o);
   if (r.mpi_worker) return r.failed ? kExitFailure : kExitOk;

@@ -185,7 +185,7 @@ ProcessFarm PointFarm(const SweepSpec& spec, const std::string& dir) {
     o.quiet = true;
     o.report = false;  // the sweep's report is the product; a point's is drawn on demand
     o.scenario_file = spec.file + "#" + spec.points[i].id;
-    RunScenario(spec.points[i].scenario, o);
+    RunScenario(spec.PointScenario(i), o);
   };
   farm.describe = [&spec](std::size_t i) { return "point " + spec.points[i].id; };
   farm.local_dir = [&spec, dir](std::size_t i) { return PointDir(dir, spec.points[i].id); };

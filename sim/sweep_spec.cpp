@@ -7,6 +7,9 @@
 #include <map>
 #include <set>
 
+#include "sim/core/interrupt.h"
+#include "sim/core/progress.h"
+
 namespace uavsim::sim {
 namespace {
 
@@ -268,8 +271,39 @@ std::string Blame(const std::vector<Assignment>& blame, const std::string& point
   return at;
 }
 
+// One point's scenario document: the base scenario with the parameters'
+// values at `index` and `seed` applied. `blame` (when given) receives which
+// spec location set each scenario pointer; `what` names the point.
+Json PointDocument(const SpecReader& r, const SweepSpec& out, const Json& base_json,
+                   const std::vector<std::vector<std::string>>& value_pointers,
+                   const SweepPointSpec& pt, std::vector<Assignment>* blame, std::string* what) {
+  Json doc = base_json;
+  if (what) *what = "point " + pt.id + " (";
+  for (std::size_t k = 0; k < out.parameters.size(); ++k) {
+    const SweepValue& v = out.parameters[k].values[pt.value_index[k]];
+    if (what) *what += out.parameters[k].name + "=" + v.label + ", ";
+    for (const auto& [ptr, val] : v.set) {
+      const bool cases = out.parameters[k].pointer.empty();
+      const std::string at =
+          cases ? value_pointers[k][pt.value_index[k]] + "/" + core::EscapePointerToken(ptr)
+                : value_pointers[k][pt.value_index[k]];
+      const std::string key = cases ? at : "/parameters/" + std::to_string(k) + "/pointer";
+      try {
+        SetPointer(doc, ptr, val);
+      } catch (const ConfigError& e) {
+        r.Fail(key, "point " + pt.id + ": " + e.pointer() + ": " + e.message());
+      }
+      if (blame) blame->push_back({ptr, at, key});
+    }
+  }
+  if (what) *what += "seed=" + std::to_string(pt.seed) + ")";
+  doc["seed"] = pt.seed;
+  return doc;
+}
+
 // One point of the grid: the parameters' values at `index` and `seed`,
-// applied to the base scenario and checked.
+// applied to the base scenario and checked (the scenario is not kept: a
+// grid of many points would hold as many whole scenarios).
 SweepPointSpec MakePoint(const SpecReader& r, const SweepSpec& out, const BaseScenario& base,
                          const std::vector<Assignment>& fixed,
                          const std::vector<std::vector<std::string>>& value_pointers,
@@ -280,30 +314,11 @@ SweepPointSpec MakePoint(const SpecReader& r, const SweepSpec& out, const BaseSc
   pt.id = id;
   pt.value_index = index;
   pt.seed = seed;
-  Json doc = base.json;
   std::vector<Assignment> blame = fixed;
-  std::string what = "point " + pt.id + " (";
-  for (std::size_t k = 0; k < out.parameters.size(); ++k) {
-    const SweepValue& v = out.parameters[k].values[index[k]];
-    what += out.parameters[k].name + "=" + v.label + ", ";
-    for (const auto& [ptr, val] : v.set) {
-      const bool cases = out.parameters[k].pointer.empty();
-      const std::string at = cases
-                                 ? value_pointers[k][index[k]] + "/" + core::EscapePointerToken(ptr)
-                                 : value_pointers[k][index[k]];
-      const std::string key = cases ? at : "/parameters/" + std::to_string(k) + "/pointer";
-      try {
-        SetPointer(doc, ptr, val);
-      } catch (const ConfigError& e) {
-        r.Fail(key, "point " + pt.id + ": " + e.pointer() + ": " + e.message());
-      }
-      blame.push_back({ptr, at, key});
-    }
-  }
-  what += "seed=" + std::to_string(seed) + ")";
-  doc["seed"] = seed;
+  std::string what;
+  const Json doc = PointDocument(r, out, base.json, value_pointers, pt, &blame, &what);
   try {
-    pt.scenario = ScenarioFromJson(doc, base.file, base.dir);
+    ScenarioFromJson(doc, base.file, base.dir);
   } catch (const ConfigError& e) {
     r.Fail(Blame(blame, e.pointer()), what + ": " + e.pointer() + ": " + e.message());
   }
@@ -314,22 +329,29 @@ SweepPointSpec MakePoint(const SpecReader& r, const SweepSpec& out, const BaseSc
 // seeds; each point's scenario checked now, before anything runs.
 void BuildGrid(const SpecReader& r, SweepSpec& out, const BaseScenario& base,
                const std::vector<Assignment>& fixed,
-               const std::vector<std::vector<std::string>>& value_pointers) {
+               const std::vector<std::vector<std::string>>& value_pointers, bool quiet) {
   double grid = static_cast<double>(out.seeds.size());
   for (const auto& p : out.parameters) grid *= static_cast<double>(p.values.size());
   if (grid > static_cast<double>(kMaxSweepPoints))
     r.Fail("/parameters", "refused: the grid has " + core::FormatNumber(grid) +
                               " points (at most " + std::to_string(kMaxSweepPoints) + ")");
+  // About a millisecond a point: a large grid shows progress and stops on
+  // Ctrl-C.
+  core::Progress progress("checking the sweep's points", grid, "points", quiet || grid < 1000);
   std::vector<int> index(out.parameters.size(), 0);
   std::size_t point = 0;
   while (true) {
-    for (std::uint64_t seed : out.seeds)
+    for (std::uint64_t seed : out.seeds) {
+      core::ThrowIfInterrupted();
       out.points.push_back(MakePoint(r, out, base, fixed, value_pointers, index, seed, point++));
+      progress.Update(static_cast<double>(point));
+    }
     int k = static_cast<int>(out.parameters.size()) - 1;
     while (k >= 0 && ++index[k] == static_cast<int>(out.parameters[k].values.size()))
       index[k--] = 0;
     if (k < 0) break;
   }
+  progress.Finish();
 }
 
 std::string ReadSpecName(const SpecReader& r, const Json& spec, const std::string& path) {
@@ -347,13 +369,13 @@ std::string ReadSpecName(const SpecReader& r, const Json& spec, const std::strin
 
 }  // namespace
 
-SweepSpec LoadSweepSpec(const std::string& path) {
+SweepSpec LoadSweepSpec(const std::string& path, bool quiet) {
   const std::string dir = fs::path(path).parent_path().string();
-  return SweepSpecFromJson(core::LoadJsonFile(path), path, dir.empty() ? "." : dir);
+  return SweepSpecFromJson(core::LoadJsonFile(path), path, dir.empty() ? "." : dir, quiet);
 }
 
-SweepSpec SweepSpecFromJson(const Json& spec, const std::string& path,
-                            const std::string& spec_dir) {
+SweepSpec SweepSpecFromJson(const Json& spec, const std::string& path, const std::string& spec_dir,
+                            bool quiet) {
   const SpecReader r{path};
   r.Keys(spec, "", {"name", "scenario", "set", "parameters", "seeds"});
   SweepSpec out;
@@ -382,14 +404,24 @@ SweepSpec SweepSpecFromJson(const Json& spec, const std::string& path,
   out.seeds = spec.contains("seeds")
                   ? ReadSeeds(r, spec["seeds"])
                   : std::vector<std::uint64_t>{out.base_resolved.at("seed").get<std::uint64_t>()};
-  BuildGrid(r, out, base, fixed, value_pointers);
+  BuildGrid(r, out, base, fixed, value_pointers, quiet);
+  out.base_file = base.file;
+  out.base_dir = base.dir;
+  out.value_pointers = std::move(value_pointers);
 
   out.canonical = spec;
   out.canonical["name"] = out.name;
-  out.canonical["scenario"] = base.json;
+  out.canonical["scenario"] = std::move(base.json);
   out.canonical.erase("set");
   out.canonical["seeds"] = out.seeds;
   return out;
+}
+
+Scenario SweepSpec::PointScenario(std::size_t i) const {
+  const SpecReader r{file};
+  return ScenarioFromJson(PointDocument(r, *this, canonical.at("scenario"), value_pointers,
+                                        points.at(i), nullptr, nullptr),
+                          base_file, base_dir);
 }
 
 std::vector<results::SweepParameter> SweepSpec::TableParameters() const {

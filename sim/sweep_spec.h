@@ -52,7 +52,6 @@ struct SweepPointSpec {
   std::string id;                // "p0000", ... in grid order
   std::vector<int> value_index;  // per parameter
   std::uint64_t seed = 0;
-  Scenario scenario;  // the point's scenario, validated
 };
 
 struct SweepSpec {
@@ -61,8 +60,18 @@ struct SweepSpec {
   std::vector<SweepParameter> parameters;
   std::vector<std::uint64_t> seeds;
   std::vector<SweepPointSpec> points;  // parameters' values (last fastest), then seeds
-  core::Json canonical;                // the spec with the base scenario inline
+  core::Json canonical;                // the spec with the base scenario inline (its "set" applied)
   core::Json base_resolved;            // the base scenario (with "set"), every default filled
+  // With canonical["scenario"], the recipe PointScenario() follows: where
+  // the base scenario was read (paths in it resolve against base_dir), and
+  // per parameter the spec's JSON pointer to each of its values.
+  std::string base_file, base_dir;
+  std::vector<std::vector<std::string>> value_pointers;
+
+  // Point i's scenario, rebuilt from the base and the point's values (every
+  // point was checked at load; the scenarios are not kept, so a large grid
+  // costs its recipe, not a whole scenario per point). Same result each call.
+  Scenario PointScenario(std::size_t i) const;
   // What the tables and plots show (results/sweep_report.h).
   std::vector<results::SweepParameter> TableParameters() const;
   std::vector<results::SweepAxis> Axes() const;
@@ -71,12 +80,14 @@ struct SweepSpec {
 // Refuses grids larger than this many points.
 constexpr std::size_t kMaxSweepPoints = 100000;
 
-// Throws core::ConfigError naming the file and the spec's JSON pointer.
-SweepSpec LoadSweepSpec(const std::string& path);
+// Throws core::ConfigError naming the file and the spec's JSON pointer, and
+// core::Interrupted on a termination request while it checks the points
+// (about a millisecond each; with !quiet, progress on a terminal).
+SweepSpec LoadSweepSpec(const std::string& path, bool quiet = true);
 // The same from a document already in memory: `file` names it in messages
 // (and, without a "name", names the sweep by its stem); `base_dir` resolves a
 // base scenario given as a path.
 SweepSpec SweepSpecFromJson(const core::Json& spec, const std::string& file,
-                            const std::string& base_dir);
+                            const std::string& base_dir, bool quiet = true);
 
 }  // namespace uavsim::sim

@@ -2,7 +2,7 @@
 # the longest tests start first, so the one long test does not begin after
 # half the suite and finish alone. The costs are the seconds each took in
 # a clean-clone run of .ci/run on the 2-core machine (2026-12-02); only the order
-# matters. Included after the tests catch_discover_tests found. ctest
+# matters. Included after the tests discover_tests.cmake found. ctest
 # ignores a name that matches no test: keep these in step with the names.
 # (Tests added in CMakeLists.txt itself are defined after this file runs:
 # they get their COST there.)

@@ -4,7 +4,7 @@
 // checks every grid point's scenario.
 //
 // The loader checks each point's whole scenario (about 6 ms a point under
-// ASan, 0.2 MB kept per point): a 150-byte spec with 2000 points takes 12 s.
+// ASan): a 150-byte spec with 2000 points takes 12 s.
 // Grids of more than kMaxFuzzPoints points are therefore skipped unless they
 // exceed sim::kMaxSweepPoints, whose refusal comes before any point is
 // built. The estimate below mirrors BuildGrid's count (values, cases or a

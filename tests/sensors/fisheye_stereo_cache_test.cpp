@@ -176,7 +176,7 @@ core::WeatherConfig Night() {
 }  // namespace
 
 TEST_CASE("FisheyeStereo cache: frames equal the full render's bit for bit, in every weather",
-          "[sensors]") {
+          "[sensors][slow]") {
   core::WorldGeometry world = Street();
   RaycastScene scene(world);
   for (const MovingObject& o : AllObjects()) scene.AddMovingObject(o.mesh, o.X_WO);

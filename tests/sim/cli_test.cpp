@@ -39,7 +39,7 @@ Json WithoutWallClock(Json j) {
 }
 }  // namespace
 
-TEST_CASE("CLI: --version, --help and every subcommand's --help", "[sim]") {
+TEST_CASE("CLI: --version, --help and every subcommand's --help", "[sim][slow]") {
   auto v = RunCli({"--version"});
   CHECK(v.exit_code == 0);
   CHECK_THAT(v.out, Catch::StartsWith("uavsim 0.1.0"));
@@ -54,12 +54,13 @@ TEST_CASE("CLI: --version, --help and every subcommand's --help", "[sim]") {
   CHECK(none.exit_code == 2);
 }
 
-TEST_CASE("CLI: usage errors exit 2 with one line", "[sim]") {
+TEST_CASE("CLI: usage errors exit 2 with one line", "[sim][slow]") {
   for (const auto& args :
        std::vector<std::vector<std::string>>{{"frobnicate"},
                                              {"run"},
                                              {"run", kDefault, "--bogus"},
-                                             {"validate", kDefault, kDefault},
+                                             {"validate", kDefault, kDefault, "--resolved"},
+                                             {"validate"},
                                              {"run", kDefault, "--seed", "-3"},
                                              {"run", kDefault, "--duration", "abc"},
                                              {"run", kDefault, "--record", "sonar"},
@@ -74,7 +75,7 @@ TEST_CASE("CLI: usage errors exit 2 with one line", "[sim]") {
   }
 }
 
-TEST_CASE("CLI: validate accepts the default scenario and {} ", "[sim]") {
+TEST_CASE("CLI: validate accepts the default scenario and {} ", "[sim][slow]") {
   auto r = RunCli({"validate", kDefault});
   CHECK(r.exit_code == 0);
   CHECK_THAT(r.out, Catch::Contains("ok"));
@@ -91,12 +92,20 @@ TEST_CASE("CLI: validate accepts the default scenario and {} ", "[sim]") {
   auto missing = RunCli({"validate", dir + "/nope.json"});
   CHECK(missing.exit_code == 2);
   CHECK(missing.err == dir + "/nope.json: cannot read file: No such file or directory\n");
+  // Several files: each checked, a line per bad one, exit 2 if any is bad.
+  auto several = RunCli({"validate", dir + "/empty.json", dir + "/nope.json", kDefault});
+  CHECK(several.exit_code == 2);
+  CHECK(several.err == dir + "/nope.json: cannot read file: No such file or directory\n");
+  CHECK(CountLines(several.out) == 2);
+  CHECK_THAT(several.out, Catch::StartsWith(dir + "/empty.json: ok ("));
+  CHECK_THAT(several.out, Catch::Contains("\n" + kDefault + ": ok ("));
+  CHECK(RunCli({"validate", dir + "/empty.json", kDefault, "--quiet"}).exit_code == 0);
 }
 
 TEST_CASE(
     "CLI: paths on the command line resolve against the working directory, in a file "
     "against its folder",
-    "[sim]") {
+    "[sim][slow]") {
   // The README's `--set /pipeline/model=models/mine`, run from a folder that
   // holds models/mine: it used to look for scenarios/models/mine (issue 24).
   const std::string dir = TempDir("paths");
@@ -156,7 +165,8 @@ TEST_CASE("CLI: a model whose files changed since training is refused, naming th
   CHECK(!fs::exists(dir + "/run"));
 }
 
-TEST_CASE("CLI: inputs that are not regular files are refused at once, naming the limit", "[sim]") {
+TEST_CASE("CLI: inputs that are not regular files are refused at once, naming the limit",
+          "[sim][slow]") {
   // /dev/zero used to be read until memory ran out, a FIFO to block until
   // killed (issue 24). Scenario, sweep spec and training config alike.
   const std::string dir = TempDir("special");
@@ -198,7 +208,7 @@ TEST_CASE("CLI: inputs that are not regular files are refused at once, naming th
                        "6901 forbids: write 1\n");
 }
 
-TEST_CASE("CLI: run writes the run directory of DESIGN.md", "[sim]") {
+TEST_CASE("CLI: run writes the run directory of DESIGN.md", "[sim][slow]") {
   const std::string out = TempDir("run") + "/r";
   // 3 s of the default scenario: every sensor renders, every link carries.
   auto r = RunCli({"run", kDefault, "--out", out, "--quiet", "--duration", "3"});
@@ -323,7 +333,7 @@ TEST_CASE("CLI: run writes the run directory of DESIGN.md", "[sim]") {
 }
 
 TEST_CASE("CLI: the same scenario and seed give byte-identical files, another seed differs",
-          "[sim]") {
+          "[sim][slow]") {
   const std::string dir = TempDir("determinism");
   // A random trajectory, clock jitter, and all three sensors with their noise,
   // pre-processing and the EKF: everything that draws random numbers.
@@ -357,7 +367,8 @@ TEST_CASE("CLI: the same scenario and seed give byte-identical files, another se
   CHECK(ReadFile(a + "/truth.csv") != ReadFile(c + "/truth.csv"));
 }
 
-TEST_CASE("CLI: execution settings change no output byte: static cache, parallel nodes", "[sim]") {
+TEST_CASE("CLI: execution settings change no output byte: static cache, parallel nodes",
+          "[sim][slow]") {
   const std::string dir = TempDir("execution");
   // Rain, fog and a distractor UAV, every sensor recorded, both methods:
   // each setting on and off must give the same files.
@@ -408,7 +419,7 @@ TEST_CASE("CLI: execution settings change no output byte: static cache, parallel
   }
 }
 
-TEST_CASE("CLI: a killed run leaves nothing under its final name", "[sim]") {
+TEST_CASE("CLI: a killed run leaves nothing under its final name", "[sim][slow]") {
   const std::string dir = TempDir("killed");
   // A long run with a cheap world: nothing but the truth timer at a high rate.
   WriteFile(dir + "/long.json",

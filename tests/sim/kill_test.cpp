@@ -66,7 +66,7 @@ void KillAtRandomMoments(const std::vector<std::string>& args, const std::string
 }  // namespace
 
 TEST_CASE("Kill: a run killed at random moments leaves no half-written run directory",
-          "[sim][kill]") {
+          "[sim][kill][slow]") {
   const std::string dir = TempDir("kill-run");
   const auto args = [&](const std::string& out) {
     return std::vector<std::string>{"run", kDefault, "--duration", "2", "--out", out, "--quiet"};
@@ -92,7 +92,7 @@ TEST_CASE("Kill: a run killed at random moments leaves no half-written run direc
 }
 
 TEST_CASE("Kill: training killed at random moments leaves no half-written model or data",
-          "[sim][kill][train]") {
+          "[sim][kill][train][slow]") {
   const std::string dir = TempDir("kill-train");
   // Three short episodes (training, validation, test), one epoch a stage:
   // simulation and both stages are each a good share of the span.
@@ -135,7 +135,8 @@ TEST_CASE("Kill: training killed at random moments leaves no half-written model 
   CHECK(ReadFile(model + "/uavloc.pt") == ReadFile(dir + "/ref/uavloc.pt"));
 }
 
-TEST_CASE("Kill: SIGTERM or SIGINT inside one heavy capture stops the run at once", "[sim][kill]") {
+TEST_CASE("Kill: SIGTERM or SIGINT inside one heavy capture stops the run at once",
+          "[sim][kill][slow]") {
   // One LiDAR frame of 1e8 beams, or radar angle estimation over a 4 x 256
   // array: before the capture polled, the signal waited 38 to 111 s for the
   // frame to end.

@@ -223,15 +223,16 @@ TEST_CASE("Sweep spec: the grid is values x range x cases x seeds, last paramete
     CHECK(p.value_index == std::vector<int>{l, r, w});
     CHECK(p.seed == seeds[i % 2]);
     // The point's scenario has every assignment applied, and the spec's "set".
-    CHECK(p.scenario.seed == seeds[i % 2]);
-    CHECK(p.scenario.duration_s == 1.0);
-    CHECK(p.scenario.pipeline.methods == std::vector<std::string>{"ekf"});
-    CHECK(p.scenario.links.at("default").loss.p == loss[l]);
-    CHECK(p.scenario.weather.rain_mm_h == rain[r]);
-    CHECK(p.scenario.weather.fog_visibility_m.has_value() == (w == 1));
-    if (w == 1 && p.scenario.weather.fog_visibility_m)
-      CHECK(*p.scenario.weather.fog_visibility_m == 300.0);
-    CHECK(p.scenario.links.at("default").snr_db == (w == 1 ? 10.0 : 25.0));
+    const uavsim::sim::Scenario scenario = s.PointScenario(i);
+    CHECK(scenario.seed == seeds[i % 2]);
+    CHECK(scenario.duration_s == 1.0);
+    CHECK(scenario.pipeline.methods == std::vector<std::string>{"ekf"});
+    CHECK(scenario.links.at("default").loss.p == loss[l]);
+    CHECK(scenario.weather.rain_mm_h == rain[r]);
+    CHECK(scenario.weather.fog_visibility_m.has_value() == (w == 1));
+    if (w == 1 && scenario.weather.fog_visibility_m)
+      CHECK(*scenario.weather.fog_visibility_m == 300.0);
+    CHECK(scenario.links.at("default").snr_db == (w == 1 ? 10.0 : 25.0));
   }
 
   // Numeric parameters are plot axes, with their values as x.
@@ -301,7 +302,7 @@ TEST_CASE("Sweep spec: ranges give exact decimal values, seeds from-count, no pa
     CHECK(s.TableParameters().at(0).labels == c.labels);
     REQUIRE(s.points.size() == c.values.size());
     for (std::size_t i = 0; i < c.values.size(); ++i)
-      CHECK(s.points[i].scenario.links.at("default").loss.p == c.values[i]);
+      CHECK(s.PointScenario(i).links.at("default").loss.p == c.values[i]);
   }
 
   // Seeds as {from, count}; without parameters, a point per seed.
@@ -312,7 +313,7 @@ TEST_CASE("Sweep spec: ranges give exact decimal values, seeds from-count, no pa
   REQUIRE(s.points.size() == 3);
   for (std::size_t i = 0; i < 3; ++i) {
     CHECK(s.points[i].value_index.empty());
-    CHECK(s.points[i].scenario.seed == 5 + i);
+    CHECK(s.PointScenario(i).seed == 5 + i);
   }
   // Without "seeds", the base scenario's seed (default.json: 1).
   WriteFile(dir + "/noseeds.json", CheapSpec("noseeds", ""));
@@ -324,7 +325,7 @@ TEST_CASE("Sweep spec: ranges give exact decimal values, seeds from-count, no pa
 
 TEST_CASE(
     "Sweep spec errors exit 2 with one line naming the spec and its pointer, creating nothing",
-    "[sim][sweep]") {
+    "[sim][sweep][slow]") {
   const std::string dir = TempDir("sweep-errors");
   const std::string loss = R"("pointer": "/links/default/loss/p")";
   struct Case {
@@ -441,7 +442,7 @@ TEST_CASE(
   CHECK_THAT(msg, Catch::StartsWith(dir + "/spec4.json: /parameters/0/values/1: "));
 }
 
-TEST_CASE("Sweep: a full sweep writes summary.csv, aggregate.csv and plots", "[sim][sweep]") {
+TEST_CASE("Sweep: a full sweep writes summary.csv, aggregate.csv and plots", "[sim][sweep][slow]") {
   const Reference& ref = Ref();
   CHECK(FinishedPoints(ref.dir) == std::vector<std::string>{"p0000", "p0001", "p0002", "p0003"});
   CHECK(PartialFolders(ref.dir).empty());
@@ -500,7 +501,8 @@ TEST_CASE("Sweep: a full sweep writes summary.csv, aggregate.csv and plots", "[s
   CHECK(refs.pngs >= 2);  // the loss axis's small multiples and rate vs SNR at least
 }
 
-TEST_CASE("Sweep: a killed sweep resumes where it stopped, to the same tables", "[sim][sweep]") {
+TEST_CASE("Sweep: a killed sweep resumes where it stopped, to the same tables",
+          "[sim][sweep][slow]") {
   const Reference& ref = Ref();
   const std::string root = TempDir("sweep-resume");
   const std::string out = root + "/out";
@@ -547,7 +549,7 @@ TEST_CASE("Sweep: a killed sweep resumes where it stopped, to the same tables", 
 }
 
 TEST_CASE("Sweep: killed at random moments, then resumed, it gives the same tables",
-          "[sim][sweep][kill]") {
+          "[sim][sweep][kill][slow]") {
   const Reference& ref = Ref();
   const std::string root = TempDir("sweep-random-kills");
   const std::string out = root + "/out";
@@ -581,7 +583,7 @@ TEST_CASE("Sweep: killed at random moments, then resumed, it gives the same tabl
 }
 
 TEST_CASE("Sweep: SIGINT or SIGTERM stops a sweep with exit 130, keeping finished points",
-          "[sim][sweep]") {
+          "[sim][sweep][slow]") {
   const std::string root = TempDir("sweep-signal");
   const std::string spec = root + "/signal.json";
   WriteFile(spec, CheapSpec("signal", R"("seeds": {"from": 1, "count": 6})"));
@@ -615,9 +617,37 @@ TEST_CASE("Sweep: SIGINT or SIGTERM stops a sweep with exit 130, keeping finishe
     CHECK(PartialFolders(out).empty());  // interrupted points clean up
     CHECK_FALSE(fs::exists(out + "/summary.csv"));
   }
+
+  // A large grid takes a while to check (about a millisecond a point): a
+  // signal then stops the sweep before it creates anything.
+  const std::string big = root + "/big.json";
+  WriteFile(big, CheapSpec("big", R"("parameters": [
+      {"name": "loss", "pointer": "/links/default/loss/p",
+       "range": {"from": 0, "to": 0.995, "step": 0.005}},
+      {"name": "rain", "pointer": "/weather/rain_mm_h", "range": {"from": 0, "to": 99, "step": 1}}],
+      "seeds": [1, 2])"));
+  const std::string out = root + "/big-out";
+  Background sweep({"sweep", big, "--out", out, "--quiet"}, root + "/big-log");
+  // Once uavsim (not the test's fork before exec) handles SIGTERM (/proc's
+  // SigCgt mask), it is reading the spec and then checking its 40 000 points.
+  const auto handles_sigterm = [pid = sweep.pid()] {
+    const std::string proc = "/proc/" + std::to_string(pid);
+    std::error_code ec;
+    if (fs::read_symlink(proc + "/exe", ec) != fs::canonical(UAVSIM_CLI)) return false;
+    std::istringstream status(ReadFile(proc + "/status"));
+    std::string line;
+    while (std::getline(status, line))
+      if (line.rfind("SigCgt:", 0) == 0)
+        return (std::stoull(line.substr(7), nullptr, 16) >> (SIGTERM - 1) & 1) != 0;
+    return false;
+  };
+  REQUIRE(sweep.WaitFor(handles_sigterm));
+  kill(sweep.pid(), SIGTERM);
+  CHECK(sweep.Wait() == 130);
+  CHECK_FALSE(fs::exists(out));
 }
 
-TEST_CASE("Sweep: under mpirun the points and tables equal a local run's", "[sim][sweep]") {
+TEST_CASE("Sweep: under mpirun the points and tables equal a local run's", "[sim][sweep][slow]") {
   const Reference& ref = Ref();
   const std::string mpirun = FindOnPath("mpirun");
   if (mpirun.empty()) FAIL("mpirun is not on PATH (Debian: apt-get install openmpi-bin)");
@@ -637,7 +667,7 @@ TEST_CASE("Sweep: under mpirun the points and tables equal a local run's", "[sim
 }
 
 TEST_CASE("Sweep: shards run their points, merge writes the tables once all are done",
-          "[sim][sweep]") {
+          "[sim][sweep][slow]") {
   const Reference& ref = Ref();
   const std::string root = TempDir("sweep-shards");
   for (const std::vector<std::string>& bad :
@@ -698,7 +728,8 @@ TEST_CASE("Sweep: shards run their points, merge writes the tables once all are 
   CHECK(CountLines(not_sweep.err) == 1);
 }
 
-TEST_CASE("Sweep: a folder made by another spec or base scenario is refused", "[sim][sweep]") {
+TEST_CASE("Sweep: a folder made by another spec or base scenario is refused",
+          "[sim][sweep][slow]") {
   const std::string root = TempDir("sweep-changed");
   Json base = Json::parse(ReadFile(kDefault));
   WriteFile(root + "/base.json", base.dump(2));
@@ -764,7 +795,8 @@ TEST_CASE("Sweep: a folder made by another spec or base scenario is refused", "[
   CHECK(FileList(other) == std::vector<std::string>{"keep.txt"});
 }
 
-TEST_CASE("Sweep: a point that fails costs that point only, a rerun retries it", "[sim][sweep]") {
+TEST_CASE("Sweep: a point that fails costs that point only, a rerun retries it",
+          "[sim][sweep][slow]") {
   const std::string root = TempDir("sweep-fail");
   // The learned pipeline's model folder passes the check but cannot be
   // loaded: the "uavloc" case's point fails when it runs, the "ekf" one not.

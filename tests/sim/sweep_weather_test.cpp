@@ -42,7 +42,7 @@ std::vector<std::string> Column(const std::string& csv, const std::string& name)
 }  // namespace
 
 TEST_CASE("Sweep: rain lowers delivery on a 60 GHz uplink and reaches LiDAR and radar",
-          "[sim][sweep]") {
+          "[sim][sweep][slow]") {
   const std::string dir = TempDir("sweep-weather");
   // Clear-sky Es/N0 22 dB over a 500 m rain-filled path at 60 GHz: rain of
   // R mm/h takes gamma_R(60 GHz, R) * 0.5 km off the SNR.

@@ -48,7 +48,7 @@ const Json& Stage(const Json& report, const std::string& name) {
 }  // namespace
 
 TEST_CASE("CLI: train --quick learns, is deterministic, and its model runs in the loop",
-          "[sim][train]") {
+          "[sim][train][slow]") {
   const std::string dir = TempDir("train");
   const std::string model = dir + "/model", data = dir + "/episodes.bin";
   // Two episodes at a time (the episodes do not depend on it: see the --jobs test).
@@ -164,7 +164,7 @@ TEST_CASE("CLI: train --quick learns, is deterministic, and its model runs in th
   }
 }
 
-TEST_CASE("CLI: train and run refuse what they cannot use, naming it", "[sim][train]") {
+TEST_CASE("CLI: train and run refuse what they cannot use, naming it", "[sim][train][slow]") {
   const std::string dir = TempDir("train-errors");
   auto few = RunCli({"train", kDefault, "--episodes", "2", "--out", dir + "/m"});
   CHECK(few.exit_code == 2);
@@ -214,7 +214,7 @@ TEST_CASE("CLI: train and run refuse what they cannot use, naming it", "[sim][tr
 }
 
 TEST_CASE("CLI: train reads its tuning from --config; the old flags name their keys",
-          "[sim][train]") {
+          "[sim][train][slow]") {
   const std::string dir = TempDir("train-config");
   // A misspelt key: did you mean, one line, exit 2, nothing written.
   WriteFile(dir + "/typo.json", "{\"selection_weigth\": 2}");
@@ -340,7 +340,7 @@ TEST_CASE("Training episodes vary the trajectory, seed, weather and loss within 
 }
 
 TEST_CASE("The default model: three modalities beat each single one on held-out trajectories",
-          "[sim][train]") {
+          "[sim][train][slow]") {
   uavsim::pipeline::InitTorch(1, 1);
   const auto base = uavsim::sim::LoadScenario(kDefault);
   // Trajectories the default model never saw (it was trained on seed 1's draws).
@@ -364,7 +364,7 @@ TEST_CASE("The default model: three modalities beat each single one on held-out 
 }
 
 TEST_CASE("CLI: train --jobs 2 and mpirun simulate the episodes one job does, byte for byte",
-          "[sim][train]") {
+          "[sim][train][slow]") {
   const std::string dir = TempDir("train-jobs");
   // Three short episodes and one epoch a stage: this is about the episodes.
   const std::vector<std::string> common{"train",

@@ -342,7 +342,7 @@ TEST_CASE("IbCcModel: loss is MSE + beta KL and gradients reach every parameter"
   }
 }
 
-TEST_CASE("IbCcModel: a small training run lowers the loss tenfold", "[pipeline]") {
+TEST_CASE("IbCcModel: a small training run lowers the loss tenfold", "[pipeline][slow]") {
   InitTorch(1, 14);
   // 200 random world-frame LiDAR clouds of 4 to 16 points; the target is
   // their centroid.

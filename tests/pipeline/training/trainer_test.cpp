@@ -208,7 +208,7 @@ WindowInputs EncodedWindow(const UavLocModelFiles& files, const Episode& ep, std
 
 }  // namespace
 
-TEST_CASE("Trainer: writes a complete model folder and an honest report", "[pipeline]") {
+TEST_CASE("Trainer: writes a complete model folder and an honest report", "[pipeline][slow]") {
   const Trained& t = TrainedOnce();
   const Dataset& data = Synthetic();
   for (const char* name :
@@ -311,7 +311,7 @@ TEST_CASE("Trainer: writes a complete model folder and an honest report", "[pipe
   CHECK(files->edge().window_s() == kWindow);
 }
 
-TEST_CASE("Trainer: the same seed trains byte-identical weights", "[pipeline]") {
+TEST_CASE("Trainer: the same seed trains byte-identical weights", "[pipeline][slow]") {
   const Trained& first = TrainedOnce();
   const std::string again = testing::TempDir("trainer-again") + "/model";
   const TrainReport report = TrainInto(again);
@@ -332,7 +332,8 @@ TEST_CASE("Trainer: the same seed trains byte-identical weights", "[pipeline]") 
   CHECK(report.test.rmse_m == first.report.test.rmse_m);
 }
 
-TEST_CASE("Trainer: EvaluateModel scores the saved model on held-out episodes", "[pipeline]") {
+TEST_CASE("Trainer: EvaluateModel scores the saved model on held-out episodes",
+          "[pipeline][slow]") {
   const Trained& t = TrainedOnce();
   InitTorch(1, kSeed);
   const Evaluation ev = EvaluateModel(t.dir, Synthetic().test);
@@ -376,7 +377,7 @@ TEST_CASE("Trainer: refuses a data set without training or validation episodes",
 }
 
 TEST_CASE("EdgeLocalizer: the trained model rides out windows with every modality missing",
-          "[pipeline]") {
+          "[pipeline][slow]") {
   const Trained& t = TrainedOnce();
   InitTorch(1, kSeed);
   const auto files = UavLocModelFiles::Load(t.dir);
@@ -443,7 +444,8 @@ TEST_CASE("EdgeLocalizer: untrained weights ride out windows with every modality
   CHECK_FALSE(edge->OnWindow(stray).has_value());
 }
 
-TEST_CASE("Trainer: the MLP bottleneck baseline trains, saves and loads as such", "[pipeline]") {
+TEST_CASE("Trainer: the MLP bottleneck baseline trains, saves and loads as such",
+          "[pipeline][slow]") {
   const std::string dir = testing::TempDir("trainer-mlp") + "/model";
   TrainOptions o = Tiny();
   o.bottleneck = IbBottleneck::kMlp;
@@ -464,7 +466,7 @@ TEST_CASE("Trainer: the MLP bottleneck baseline trains, saves and loads as such"
 }
 
 TEST_CASE("Trainer: stage 1 leaves out observations of something other than the target",
-          "[pipeline]") {
+          "[pipeline][slow]") {
   // Every 5th LiDAR cluster 10 m off the truth (weather returns), every 7th
   // camera ROI 10 degrees off its direction (a bird): exactly those are left
   // out of stage 1; the 0.1 m LiDAR noise and the exact camera bearings keep
