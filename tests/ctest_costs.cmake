@@ -8,10 +8,9 @@
 # they get their COST there.)
 foreach(entry
     "CLI: train --quick learns, is deterministic, and its model runs in the loop=650"
-    "Malformed battery: validate exits 2 with one line naming file, pointer and fault=130"
     "The default model: three modalities beat each single one on held-out trajectories=115"
     "CLI: train --jobs 2 and mpirun simulate the episodes one job does, byte for byte=90"
-    "Kill: training killed at random moments leaves no half-written model or data=80")
+    "Kill: training killed at random moments leaves no half-written model or data=90")
   string(FIND "${entry}" "=" at REVERSE)
   string(SUBSTRING "${entry}" 0 ${at} name)
   math(EXPR from "${at} + 1")
