@@ -35,11 +35,20 @@ void Visit(V& v, ModelManifest& c) {
   v("latent_dim", c.latent_dim, core::Rule::Range(2, 4096));
   v("window_s", c.window_s, core::Rule::Range(1e-9, 3600.0));
   for (auto [key, name] : {std::pair{"camera", &c.camera}, std::pair{"lidar", &c.lidar},
-                           std::pair{"radar", &c.radar}, std::pair{"edge", &c.edge}}) {
+                           std::pair{"radar", &c.radar}}) {
     v(key, *name);
     v.Check(IsPlainFileName(*name), key,
             "expected a file name in the model's folder, got \"" + *name + "\"");
   }
+  // The edge heads: either may be empty, not both.
+  for (auto [key, name] :
+       {std::pair{"edge", &c.edge}, std::pair{"anchored_edge", &c.anchored_edge}}) {
+    v(key, *name);
+    v.Check(name->empty() || IsPlainFileName(*name), key,
+            "expected a file name in the model's folder or \"\", got \"" + *name + "\"");
+  }
+  v.Check(!c.edge.empty() || !c.anchored_edge.empty(), "edge",
+          "the model names no edge network (edge and anchored_edge are both empty)");
   if constexpr (V::kReading) {
     if (v.Has("training")) v.Object("training", c.training.emplace());
   } else if (c.training) {
@@ -64,6 +73,39 @@ ModelManifest ReadModelManifest(const std::string& manifest_path) {
 
 void WriteModelManifest(const ModelManifest& m, const std::string& manifest_path) {
   core::WriteFileAtomic(manifest_path, core::ToJson(m).dump(2) + "\n");
+}
+
+EdgeHeads ReadEdgeHeads(const ModelManifest& m, const std::string& manifest_path) {
+  const fs::path folder = fs::path(manifest_path).parent_path();
+  EdgeHeads heads;
+  for (auto [key, name] :
+       {std::pair{"edge", &m.edge}, std::pair{"anchored_edge", &m.anchored_edge}}) {
+    if (name->empty()) continue;
+    const std::string weights = (folder / *name).string();
+    const std::string sidecar = weights + ".json";
+    std::error_code ec;
+    if (!fs::is_regular_file(weights, ec) || !fs::is_regular_file(sidecar, ec))
+      throw core::ConfigError(manifest_path, std::string("/") + key,
+                              "file not found: " + weights + " (and its sidecar " + sidecar + ")");
+    const core::Json j = core::LoadJsonFile(sidecar);
+    if (!j.is_object() || (j.contains("anchored") && !j["anchored"].is_boolean()))
+      throw core::ConfigError(sidecar, "/anchored", "expected true or false");
+    const bool anchored = j.value("anchored", false);
+    if (!j.contains("latent_dim") || !j["latent_dim"].is_number_integer() ||
+        j["latent_dim"].get<int>() != m.latent_dim)
+      throw core::ConfigError(sidecar, "/latent_dim",
+                              "expected " + std::to_string(m.latent_dim) + " as in " +
+                                  manifest_path + ", got " +
+                                  (j.contains("latent_dim") ? j["latent_dim"].dump() : "nothing"));
+    std::string& slot = anchored ? heads.anchored : heads.paper;
+    if (!slot.empty())
+      throw core::ConfigError(manifest_path, std::string("/") + key,
+                              std::string("two edge networks with the ") +
+                                  (anchored ? "anchored" : "paper's") + " head: " + slot + " and " +
+                                  weights);
+    slot = weights;
+  }
+  return heads;
 }
 
 std::unique_ptr<UavLocModelFiles> UavLocModelFiles::Load(const std::string& path) {
@@ -106,19 +148,22 @@ std::unique_ptr<UavLocModelFiles> UavLocModelFiles::Load(const std::string& path
                                   std::to_string(enc->latent_dim()));
     files->encoders_[static_cast<int>(modality)] = std::move(enc);
   }
-  const std::string edge = require(m.edge, "edge");
-  files->edge_path_ = edge;
-  files->edge_ = EdgeLocalizer::Load(edge);
-  if (files->edge_->latent_dim() != m.latent_dim)
-    throw core::ConfigError(edge + ".json", "/latent_dim",
-                            "expected " + std::to_string(m.latent_dim) + " as in " +
-                                files->manifest_path_ + ", got " +
-                                std::to_string(files->edge_->latent_dim()));
+  files->heads_ = ReadEdgeHeads(m, files->manifest_path_);
   return files;
 }
 
-std::unique_ptr<EdgeLocalizer> UavLocModelFiles::LoadEdge() const {
-  return EdgeLocalizer::Load(edge_path_);
+std::unique_ptr<EdgeLocalizer> UavLocModelFiles::LoadEdge(bool anchored) const {
+  const std::string& path = anchored ? heads_.anchored : heads_.paper;
+  if (path.empty())
+    throw core::ConfigError(
+        manifest_path_, anchored ? "/anchored_edge" : "/edge",
+        std::string("the model has no ") +
+            (anchored ? "anchored head (`uavloc_anchored`)" : "paper head (`uavloc`)") +
+            ": train one with `uavsim train --head both`");
+  auto edge = EdgeLocalizer::Load(path);
+  if (edge->anchored() != anchored)
+    throw core::ConfigError(path + ".json", "/anchored", "the head changed since the model loaded");
+  return edge;
 }
 
 }  // namespace uavsim::pipeline

@@ -5,7 +5,10 @@
 //   camera.json/.pt       the camera node's IB-CC model (ib_model_io.h)
 //   lidar.json/.pt        the LiDAR node's
 //   radar.json/.pt        the radar node's
-//   uavloc.pt/.pt.json    the edge network: TE-Align, MADW, MICA, Mamba (uavloc_model.h)
+//   uavloc.pt/.pt.json    the edge network of the paper: TE-Align, MADW, MICA, Mamba,
+//                         linear head (uavloc_model.h): method `uavloc`
+//   uavloc_anchored.pt/.pt.json  the same with our anchored head (pipeline/anchored/):
+//                         method `uavloc_anchored`
 //   training_report.json  losses per stage and held-out RMSE (written by the trainer)
 //   checksums.sha256      SHA-256 of every other file (pipeline/model_checksums.h)
 //
@@ -33,7 +36,13 @@ struct ModelManifest {
   std::string camera = "camera.json";  // per-modality IB-CC sidecars, relative to the folder
   std::string lidar = "lidar.json";
   std::string radar = "radar.json";
-  std::string edge = "uavloc.pt";  // the edge network's weights (sidecar: + ".json")
+  // The edge networks' weights (sidecars: + ".json"), either may be empty
+  // (not trained), not both: the paper's head (`uavloc`) and the anchored
+  // head (`uavloc_anchored`). Each file's sidecar says which head it holds
+  // (models written before the anchored head got its own key hold it in
+  // `edge`; Load serves it as `uavloc_anchored`).
+  std::string edge = "uavloc.pt";
+  std::string anchored_edge;
   // How it was trained, every key resolved ("training"; absent in models
   // written before the training config existed).
   std::optional<TrainingConfig> training;
@@ -48,13 +57,23 @@ std::string ModelManifestPath(const std::string& path);
 // The model shipped for scenarios/default.json (in the source tree).
 std::string DefaultModelPath();
 
+// Which file of a model folder holds which edge head, read from the
+// sidecars' "anchored" key (no weights loaded); empty: none. Throws
+// core::ConfigError naming the file for a missing or unreadable sidecar, a
+// latent size other than the manifest's, or two files of the same head.
+struct EdgeHeads {
+  std::string paper;     // path of the paper head's weights, or empty
+  std::string anchored;  // path of the anchored head's weights, or empty
+};
+EdgeHeads ReadEdgeHeads(const ModelManifest& m, const std::string& manifest_path);
+
 // Throws core::ConfigError naming the file and JSON pointer.
 ModelManifest ReadModelManifest(const std::string& manifest_path);
 // Writes atomically; throws std::runtime_error naming the path on failure.
 void WriteModelManifest(const ModelManifest& m, const std::string& manifest_path);
 
 // A loaded model: one encoder per modality (shared by that modality's nodes:
-// the run loop is single-threaded) and the edge localizer. Call InitTorch()
+// the run loop is single-threaded) and its edge heads. Call InitTorch()
 // first.
 class UavLocModelFiles {
  public:
@@ -67,17 +86,17 @@ class UavLocModelFiles {
   const ModelManifest& manifest() const { return manifest_; }
   const std::string& manifest_path() const { return manifest_path_; }
   const NodeEncoder& encoder(Modality m) const { return *encoders_[static_cast<int>(m)]; }
-  EdgeLocalizer& edge() { return *edge_; }
-  // Another copy of the edge network with its own track state (for the
-  // single-modality ablations that run beside the fused estimate).
-  std::unique_ptr<EdgeLocalizer> LoadEdge() const;
+  const EdgeHeads& heads() const { return heads_; }
+  // A fresh copy of an edge head with its own track state (the paper's, or
+  // the anchored one). Throws core::ConfigError naming the manifest when the
+  // model has no such head.
+  std::unique_ptr<EdgeLocalizer> LoadEdge(bool anchored) const;
 
  private:
   ModelManifest manifest_;
   std::string manifest_path_;
   std::unique_ptr<NodeEncoder> encoders_[kModalityCount];
-  std::unique_ptr<EdgeLocalizer> edge_;
-  std::string edge_path_;
+  EdgeHeads heads_;
 };
 
 }  // namespace uavsim::pipeline

@@ -7,7 +7,8 @@ namespace uavsim::pipeline {
 using core::Rule;
 
 const std::vector<std::string>& KnownMethods() {
-  static const std::vector<std::string> names{"uavloc", "ekf", "uavloc_camera", "uavloc_lidar",
+  static const std::vector<std::string> names{"uavloc",      "uavloc_anchored", "anchor_track",
+                                              "ekf",         "uavloc_camera",   "uavloc_lidar",
                                               "uavloc_radar"};
   return names;
 }

@@ -15,15 +15,18 @@ struct PipelineConfig {
   double window_s = 0.2;          // paper: alignment window t^w = 0.2 s
   int latent_dim = 16;            // paper: z in {4, 8, 16, 32, 64}
   double late_allowance_s = 0.0;  // grace after a window's deadline before a packet counts late
-  // uavloc: the fused three-modality estimate; ekf: the classical baseline;
-  // uavloc_camera / _lidar / _radar: the same trained network fed only that
-  // modality's latents (the paper's single-modality comparison).
-  std::vector<std::string> methods{"uavloc", "ekf"};
-  // uavloc (anchored model) answers from its first window with a track of
-  // its anchor filter (pipeline/edge/edge_localizer.h), as ekf from its first
-  // confirmed track; false: from its first window with any data (before a
-  // track its range is a guess, metres off). The single-modality ablations
-  // always answer from their first data.
+  // uavloc: the paper's pipeline, the fused three-modality estimate; ekf:
+  // the classical baseline; uavloc_camera / _lidar / _radar: the same
+  // trained network fed only that modality's latents (the paper's
+  // single-modality comparison); uavloc_anchored: our anchored head
+  // (pipeline/anchored/); anchor_track: its anchor filter alone (no
+  // learning). sim/edge_server.h says more.
+  std::vector<std::string> methods{"uavloc", "uavloc_anchored", "anchor_track", "ekf"};
+  // uavloc_anchored answers from its first window with a track of its anchor
+  // filter (pipeline/edge/edge_localizer.h), as ekf and anchor_track from
+  // their first confirmed track; false: from its first window with any data
+  // (before a track its range is a guess, metres off). uavloc and the
+  // single-modality ablations always answer from their first data.
   bool uavloc_wait_for_track = true;
   PreprocessConfig preprocess;  // the sensing nodes' pre-processing (paper Sec. IV-A)
   EkfConfig ekf;                // the classical baseline

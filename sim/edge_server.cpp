@@ -69,10 +69,11 @@ std::unique_ptr<pipeline::UavLocModelFiles> LoadModel(const Scenario& s, const s
     std::cerr << "uavsim: warning: the model " << path << " was trained for scenario \""
               << m.scenario << "\" with another world or node layout; its estimates may be poor ("
               << kHowToTrain << ")\n";
-  info = {{"path", path},
-          {"trained_for", m.scenario},
-          {"same_layout", same_layout},
-          {"head", model->edge().anchored() ? "anchored" : "paper"}};
+  core::Json heads = core::Json::array();
+  if (!model->heads().paper.empty()) heads.push_back("paper");
+  if (!model->heads().anchored.empty()) heads.push_back("anchored");
+  info = {
+      {"path", path}, {"trained_for", m.scenario}, {"same_layout", same_layout}, {"heads", heads}};
   return model;
 }
 
@@ -100,12 +101,37 @@ std::unique_ptr<pipeline::Ekf> MakeEkf(const Scenario& s) {
   return ekf;
 }
 
+// Whether a method runs the paper's head (uavloc and its single-modality
+// ablations) or the anchored one.
+bool NeedsPaperHead(const std::string& method) {
+  return method == "uavloc" || method == "uavloc_camera" || method == "uavloc_lidar" ||
+         method == "uavloc_radar";
+}
+
+// Each method's edge head is in the model (`heads`): else a ConfigError
+// naming the scenario's /pipeline/methods entry.
+void RequireHeads(const Scenario& s, const std::string& file, const std::string& path,
+                  const pipeline::EdgeHeads& heads) {
+  for (std::size_t i = 0; i < s.pipeline.methods.size(); ++i) {
+    const std::string& method = s.pipeline.methods[i];
+    const bool paper = NeedsPaperHead(method), anchored = method == "uavloc_anchored";
+    if ((paper && heads.paper.empty()) || (anchored && heads.anchored.empty()))
+      throw core::ConfigError(
+          file, "/pipeline/methods/" + std::to_string(i),
+          "the model " + path + " has no " + (paper ? "paper" : "anchored") + " head for `" +
+              method + "` (" + (paper ? "uavloc is the paper's pipeline since issue 19" : "") +
+              (paper ? "; " : "") +
+              "train both with `uavsim train SCENARIO.json --head both --out DIR` and set "
+              "/pipeline/model to DIR)");
+  }
+}
+
 }  // namespace
 
 bool NeedsTrainedModel(const Scenario& s) {
   const auto& m = s.pipeline.methods;
   return std::any_of(m.begin(), m.end(), [](const std::string& method) {
-    return method == "uavloc" || method.rfind("uavloc_", 0) == 0;
+    return NeedsPaperHead(method) || method == "uavloc_anchored";
   });
 }
 
@@ -114,14 +140,17 @@ void CheckTrainedModel(const Scenario& s, const std::string& file) {
   const std::string path = ModelPath(s);
   RequireModelFile(file, path);
   pipeline::ModelManifest m;
+  pipeline::EdgeHeads heads;
   try {
     m = pipeline::ReadModelManifest(path);
     pipeline::VerifyModelChecksums(std::filesystem::path(path).parent_path().string());
+    heads = pipeline::ReadEdgeHeads(m, path);
   } catch (const core::ConfigError& e) {
     throw core::ConfigError(file, "/pipeline/model",
                             std::string(e.what()) + " (" + kHowToTrain + ")");
   }
   CheckManifestFits(s, file, path, m);
+  RequireHeads(s, file, path, heads);
 }
 
 EdgeServer::EdgeServer(const Scenario& s, const std::string& scenario_file, bool quiet,
@@ -131,13 +160,20 @@ EdgeServer::EdgeServer(const Scenario& s, const std::string& scenario_file, bool
       window_ns_(core::Seconds(s.pipeline.window_s)) {
   if (!methods) return;
   if (Runs("ekf")) ekf_ = MakeEkf(s);
+  if (Runs("anchor_track"))
+    anchor_track_ = std::make_unique<pipeline::AnchorTrack>(s.pipeline.window_s);
   if (!NeedsTrainedModel(s)) return;
   pipeline::InitTorch(1, s.seed);
-  uavloc_ = LoadModel(s, scenario_file, quiet, model_info_);
-  uavloc_->edge().WaitForTrack(s.pipeline.uavloc_wait_for_track);
+  model_ = LoadModel(s, scenario_file, quiet, model_info_);
+  RequireHeads(s, scenario_file, model_->manifest_path(), model_->heads());
+  if (Runs("uavloc")) uavloc_ = model_->LoadEdge(false);
+  if (Runs("uavloc_anchored")) {
+    uavloc_anchored_ = model_->LoadEdge(true);
+    uavloc_anchored_->WaitForTrack(s.pipeline.uavloc_wait_for_track);
+  }
   for (const char* m : kModalities)
     if (const std::string method = std::string("uavloc_") + m; Runs(method))
-      ablations_[method] = {*core::ModalityFromName(m), uavloc_->LoadEdge()};
+      ablations_[method] = {*core::ModalityFromName(m), model_->LoadEdge(false)};
 }
 
 EdgeServer::~EdgeServer() = default;
@@ -147,18 +183,22 @@ bool EdgeServer::Runs(const std::string& method) const {
   return std::find(methods.begin(), methods.end(), method) != methods.end();
 }
 
+bool EdgeServer::SendsAnchors() const { return Runs("uavloc_anchored") || Runs("anchor_track"); }
+
 const pipeline::NodeEncoder* EdgeServer::encoder(core::Modality m) const {
-  return uavloc_ ? &uavloc_->encoder(m) : nullptr;
+  return model_ ? &model_->encoder(m) : nullptr;
 }
 
 std::uint32_t EdgeServer::MessageBytes(core::Modality m) const {
   return channel::LatentMessageBytes(scenario_.pipeline.latent_dim) +
-         (uavloc_ && uavloc_->edge().anchored() ? pipeline::AnchorBytes(m) : 0);
+         (SendsAnchors() ? pipeline::AnchorBytes(m) : 0);
 }
 
 std::vector<std::string> EdgeServer::SteeredMethods() const {
   std::vector<std::string> steered;
-  if (uavloc_ && Runs("uavloc")) steered.push_back("uavloc");
+  if (uavloc_) steered.push_back("uavloc");
+  if (uavloc_anchored_) steered.push_back("uavloc_anchored");
+  if (anchor_track_) steered.push_back("anchor_track");
   if (ekf_) steered.push_back("ekf");
   return steered;
 }
@@ -171,22 +211,26 @@ bool EdgeServer::OnArrival(const channel::Message& m, core::SimTime t_arrival) {
     if (content.camera) ekf_->Observe(content.node_id, *content.camera);
     if (content.points) ekf_->Observe(content.node_id, *content.points);
   }
-  if (uavloc_ && !content.latent.empty()) {
-    const std::int64_t k = m.t_capture_ns / window_ns_ + 1;
+  const std::int64_t k = m.t_capture_ns / window_ns_ + 1;
+  const int modality = static_cast<int>(m.modality);
+  pipeline::GeometricAnchor anchor;
+  if (SendsAnchors())
+    anchor =
+        content.camera ? pipeline::AnchorOf(*content.camera) : pipeline::AnchorOf(*content.points);
+  if (model_ && !content.latent.empty()) {
     pipeline::WindowInputs& w = pending_[k];
     w.window = k;
-    w.frames[static_cast<int>(m.modality)].push_back(
-        {core::ToSeconds(m.t_capture_ns), content.latent,
-         content.camera ? pipeline::AnchorOf(*content.camera)
-                        : pipeline::AnchorOf(*content.points)});
+    w.frames[modality].push_back({core::ToSeconds(m.t_capture_ns), content.latent, anchor});
   }
+  if (anchor_track_ && anchor.kind != pipeline::GeometricAnchor::Kind::kNone)
+    pending_anchors_[k][modality].push_back(anchor);
   return true;
 }
 
 std::map<std::string, Eigen::Vector3d> EdgeServer::EstimateWindow(std::int64_t tick, double t_s) {
   std::map<std::string, Eigen::Vector3d> estimated;
-  if (uavloc_) {
-    const std::int64_t k = tick + 1;
+  const std::int64_t k = tick + 1;
+  if (model_) {
     pipeline::WindowInputs inputs;
     inputs.window = k;
     if (auto it = pending_.find(k); it != pending_.end()) inputs = std::move(it->second);
@@ -201,10 +245,22 @@ std::map<std::string, Eigen::Vector3d> EdgeServer::EstimateWindow(std::int64_t t
       one.frames[m] = inputs.frames[m];
       if (const auto p = ablation.second->OnWindow(one)) estimated[method] = *p;
     }
-    if (Runs("uavloc")) {
+    if (uavloc_) {
       const auto timing = core::WallProfile::Measure(profile_, "edge/uavloc");
-      if (const auto p = uavloc_->edge().OnWindow(inputs)) estimated["uavloc"] = *p;
+      if (const auto p = uavloc_->OnWindow(inputs)) estimated["uavloc"] = *p;
     }
+    if (uavloc_anchored_) {
+      const auto timing = core::WallProfile::Measure(profile_, "edge/uavloc_anchored");
+      if (const auto p = uavloc_anchored_->OnWindow(inputs)) estimated["uavloc_anchored"] = *p;
+    }
+  }
+  if (anchor_track_) {
+    const auto timing = core::WallProfile::Measure(profile_, "edge/anchor_track");
+    pipeline::WindowAnchors anchors;
+    if (auto it = pending_anchors_.find(k); it != pending_anchors_.end())
+      anchors = std::move(it->second);
+    pending_anchors_.erase(pending_anchors_.begin(), pending_anchors_.upper_bound(k));
+    if (const auto p = anchor_track_->OnWindow(k, anchors)) estimated["anchor_track"] = *p;
   }
   if (ekf_) {
     const auto timing = core::WallProfile::Measure(profile_, "edge/ekf");

@@ -4,11 +4,21 @@
 // localization method, and at each alignment window's deadline asks every
 // method for its estimate of the target at the window's end.
 //
-// Methods (/pipeline/methods): `ekf` (pipeline/baselines/) fuses the
-// pre-processed measurements as they arrive; `uavloc` runs the trained
-// model's edge network (pipeline/edge/) on the IB-CC latents of each window;
-// `uavloc_camera`, `uavloc_lidar`, `uavloc_radar` run another copy of it on
-// one modality's latents, each with its own track state.
+// Methods (/pipeline/methods), every one scored on the same windows:
+//   ekf              the classical baseline (pipeline/baselines/): fuses the
+//                    pre-processed measurements as they arrive
+//   uavloc           the paper's pipeline: the trained model's edge network
+//                    (pipeline/edge/: TE-Align, MADW, MICA, Mamba, linear
+//                    head) on each window's IB-CC latents
+//   uavloc_camera, uavloc_lidar, uavloc_radar
+//                    another copy of it fed one modality's latents, each
+//                    with its own state (the paper's single-modality rows)
+//   uavloc_anchored  our extension: the model's anchored head, which picks
+//                    among the nodes' geometric anchors (pipeline/anchored/)
+//   anchor_track     that head's anchor filter alone (anchor_track.h): no
+//                    learning; what uavloc_anchored's network adds over it
+// The nodes send their geometric anchors with their latents only when
+// uavloc_anchored or anchor_track runs (MessageBytes counts them).
 //
 // Determinism: no randomness of its own; LibTorch is seeded from the
 // scenario's seed when a model is loaded.
@@ -24,6 +34,7 @@
 
 #include "channel/edge_receiver.h"
 #include "channel/packet.h"
+#include "pipeline/anchored/anchor_track.h"
 #include "pipeline/baselines/ekf.h"
 #include "pipeline/edge/edge_localizer.h"
 #include "pipeline/edge/te_align.h"
@@ -36,13 +47,14 @@
 
 namespace uavsim::sim {
 
-// Whether the scenario runs a method that needs a trained model (uavloc and
-// its single-modality ablations).
+// Whether the scenario runs a method that needs a trained model (uavloc, its
+// single-modality ablations, uavloc_anchored).
 bool NeedsTrainedModel(const Scenario& s);
 
 // What `validate` checks of that model without loading any weights: the
-// manifest exists and parses, the folder's checksums hold, and its latent
-// size and window length are the scenario's (the rules the run applies when
+// manifest exists and parses, the folder's checksums hold, it has the edge
+// head each method needs, and its latent size and window length are the
+// scenario's (the rules the run applies when
 // it loads the model). Nothing when no method needs one. Throws
 // core::ConfigError naming `file` and the scenario's pointer.
 void CheckTrainedModel(const Scenario& s, const std::string& file);
@@ -73,13 +85,15 @@ class EdgeServer {
   // The IB-CC encoder the nodes of modality m run (null without a model).
   const pipeline::NodeEncoder* encoder(core::Modality m) const;
   // Bytes of a node's message that carries something: the latent and its
-  // header, plus the geometric anchor for an anchored model.
+  // header, plus the geometric anchor when uavloc_anchored or anchor_track
+  // runs.
   std::uint32_t MessageBytes(core::Modality m) const;
   // The methods whose estimates steer a beam (the single-modality
   // ablations steer none), in the order the downlink scores them.
   std::vector<std::string> SteeredMethods() const;
-  // metrics.json's "uavloc_model" (path, trained_for, same_layout, head);
-  // null without a model.
+  // metrics.json's "uavloc_model" (path, trained_for, same_layout, heads:
+  // the edge heads the model holds, "paper" and/or "anchored"); null
+  // without a model.
   const core::Json& model_info() const { return model_info_; }
 
   // Times each method into `profile` ("edge/<method>"); null: no timing.
@@ -87,17 +101,22 @@ class EdgeServer {
 
  private:
   bool Runs(const std::string& method) const;
+  bool SendsAnchors() const;
 
   const Scenario& scenario_;
   channel::EdgeReceiver receiver_;
   core::SimTime window_ns_;
   std::unique_ptr<pipeline::Ekf> ekf_;
-  std::unique_ptr<pipeline::UavLocModelFiles> uavloc_;
+  std::unique_ptr<pipeline::UavLocModelFiles> model_;
   core::Json model_info_;
+  std::unique_ptr<pipeline::EdgeLocalizer> uavloc_;           // the paper's head
+  std::unique_ptr<pipeline::EdgeLocalizer> uavloc_anchored_;  // ours
+  std::unique_ptr<pipeline::AnchorTrack> anchor_track_;
   // Single-modality ablations: method -> (its modality, its edge network).
   std::map<std::string, std::pair<core::Modality, std::unique_ptr<pipeline::EdgeLocalizer>>>
       ablations_;
-  std::map<std::int64_t, pipeline::WindowInputs> pending_;  // window k -> latents arrived
+  std::map<std::int64_t, pipeline::WindowInputs> pending_;           // window k -> latents arrived
+  std::map<std::int64_t, pipeline::WindowAnchors> pending_anchors_;  // for anchor_track
   core::WallProfile* profile_ = nullptr;
 };
 

@@ -147,10 +147,11 @@ const char* kTrainHelp =
     "figure-eight or random flight around the scenario's flight region), seed, weather\n"
     "and uplink loss; episodes are split 70/15/15 by trajectory. Stage 1 trains each\n"
     "modality's IB-CC encoder, stage 2 TE-Align, MADW, MICA and Mamba on the sequences of\n"
-    "latents that arrived in time, with random modality dropout. Adam, early stopping on\n"
-    "validation. The model folder MODEL (default models/NAME) gets model.json (with the\n"
-    "resolved training config under \"training\"), the parts and training_report.json\n"
-    "(losses and held-out RMSE); use it with --set /pipeline/model=MODEL or\n"
+    "latents that arrived in time, with random modality dropout, once per edge head (the\n"
+    "paper's for uavloc, ours for uavloc_anchored). Adam, early stopping on validation.\n"
+    "The model folder MODEL (default models/NAME) gets model.json (with the resolved\n"
+    "training config under \"training\"), the parts and training_report.json (losses and\n"
+    "held-out RMSE per head); use it with --set /pipeline/model=MODEL or\n"
     "\"pipeline\": {\"model\": \"MODEL\"}.\n"
     "\n"
     "  --config F     the training config, a JSON object; every key has a default ({} is\n"
@@ -172,8 +173,9 @@ const char* kTrainHelp =
     "  --seed N       seeds the episodes, the split and the weights (default 1)\n"
     "  --bottleneck B ib (default: the paper's IB-CC head, mu/sigma and KL) or mlp (its\n"
     "                 MLP baseline of equal depth and parameter count, no KL)\n"
-    "  --head H       anchored (default: the Mamba output picks among the nodes' geometric\n"
-    "                 anchors; see NOTES.md) or paper (its linear head)\n"
+    "  --head H       the edge heads to train on the same encoders: both (default), paper\n"
+    "                 (the paper's linear head: method uavloc) or anchored (ours: the Mamba\n"
+    "                 output picks among the nodes' geometric anchors; uavloc_anchored)\n"
     "  --threads N    LibTorch threads (default 1); results depend on it\n"
     "  --jobs N       episodes simulated at a time, each in its own process with cores / N\n"
     "                 threads (default 1; per rank under mpirun, where rank 0 hands out\n"
@@ -451,9 +453,10 @@ int Train(int argc, char** argv) {
     c.mlp_bottleneck = *v == "mlp";
   }
   if (auto v = a.Value("--head")) {
-    if (*v != "anchored" && *v != "paper")
-      throw UsageError("uavsim train: --head expects anchored or paper, got '" + *v + "'");
-    c.paper_head = *v == "paper";
+    if (*v != "anchored" && *v != "paper" && *v != "both")
+      throw UsageError("uavsim train: --head expects both, paper or anchored, got '" + *v + "'");
+    c.paper_head = *v != "anchored";
+    c.anchored_head = *v != "paper";
   }
   if ((a.Value("--episodes") && c.episodes < 3) || (a.Value("--threads") && c.threads < 1) ||
       c.jobs < 1)
@@ -474,12 +477,15 @@ int Train(int argc, char** argv) {
   if (!c.quiet) {
     for (const auto& st : r.stages)
       std::printf(
-          "%-7s %5zu train %5zu val  epochs %3d (best %3d)  val loss %.4g -> %.4g  %.0f s\n",
+          "%-15s %5zu train %5zu val  epochs %3d (best %3d)  val loss %.4g -> %.4g  %.0f s\n",
           st.name.c_str(), st.train_items, st.validation_items, st.epochs, st.best_epoch,
           st.initial_validation_loss, st.best_validation_loss, st.seconds);
-    std::printf("held-out RMSE (m):");
-    for (const auto& [k, v] : r.test.rmse_m) std::printf(" %s %.3f", k.c_str(), v);
-    std::printf("\nmodel written to %s (use: --set /pipeline/model=%s)\n", c.out_dir.c_str(),
+    for (const auto& [method, ev] : r.test) {
+      std::printf("held-out RMSE of %s (m):", method.c_str());
+      for (const auto& [k, v] : ev.rmse_m) std::printf(" %s %.3f", k.c_str(), v);
+      std::printf("\n");
+    }
+    std::printf("model written to %s (use: --set /pipeline/model=%s)\n", c.out_dir.c_str(),
                 c.out_dir.c_str());
   }
   return kExitOk;

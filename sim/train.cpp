@@ -301,7 +301,8 @@ std::optional<pipeline::TrainReport> RunTraining(const Scenario& base, const Tra
   t.latent_dim = base.pipeline.latent_dim;
   t.window_s = base.pipeline.window_s;
   if (c.mlp_bottleneck) t.bottleneck = pipeline::IbBottleneck::kMlp;
-  t.anchored = !c.paper_head;
+  t.paper_head = c.paper_head;
+  t.anchored_head = c.anchored_head;
   if (c.episodes > 0) plan.episodes = c.episodes;
   if (c.episode_s > 0) plan.episode_s = c.episode_s;
 

@@ -89,7 +89,8 @@ struct TrainCommand {
   int episodes = 0;                   // 0: the plan's default
   double episode_s = 0.0;             // 0: the plan's default
   bool mlp_bottleneck = false;        // the paper's MLP baseline instead of the IB head
-  bool paper_head = false;            // the paper's linear edge head instead of the anchored one
+  bool paper_head = true;             // train the paper's linear edge head (uavloc)
+  bool anchored_head = true;          // train our anchored edge head (uavloc_anchored)
   pipeline::TrainingConfig training;  // as ResolveTrainingConfig gives it
   int threads = 1;                    // LibTorch intra-op threads (see NOTES.md: 1 is fastest here)
   int jobs = 1;                       // episodes simulated at a time (per rank under mpirun)

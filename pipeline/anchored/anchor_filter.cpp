@@ -255,6 +255,17 @@ bool AnchorFilter::AgreesWithRay(Modality m, const GeometricAnchor& a) const {
   return ray_ && AnchorAgreesWithRay(m, a, *ray_);
 }
 
+void AnchorFilter::ObserveWindow(const WindowAnchors& anchors) {
+  std::vector<std::pair<Modality, const GeometricAnchor*>> ordered;
+  for (std::size_t m = 0; m < anchors.size(); ++m)
+    for (const GeometricAnchor& a : anchors[m])
+      if (a.kind != GeometricAnchor::Kind::kNone)
+        ordered.emplace_back(static_cast<Modality>(m), &a);
+  std::stable_sort(ordered.begin(), ordered.end(),
+                   [](const auto& a, const auto& b) { return a.second->t_s < b.second->t_s; });
+  for (const auto& [m, a] : ordered) Observe(m, *a);
+}
+
 void AnchorFilter::Observe(Modality m, const GeometricAnchor& a) {
   if (a.kind == GeometricAnchor::Kind::kNone) return;
   const bool is_ray = a.kind == GeometricAnchor::Kind::kRay;

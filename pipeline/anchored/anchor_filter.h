@@ -83,6 +83,9 @@ class AnchorFilter {
   // than the filter's time is applied at that time). Throws
   // std::invalid_argument for a kind that does not fit the modality.
   void Observe(Modality m, const GeometricAnchor& anchor);
+  // Every anchor of a window (kNone skipped), in capture order, ties in
+  // Modality order (the camera first).
+  void ObserveWindow(const WindowAnchors& anchors);
   // The track predicted to t_s (not moved there), nothing before a track
   // has started or kMaxPredict_s after its last ranging update.
   std::optional<Estimate> PredictAt(double t_s) const;

@@ -46,14 +46,7 @@ AnchorWindow AnchorTracker::Update(std::int64_t k,
 
 AnchorWindow AnchorTracker::Update(std::int64_t k, const WindowAnchors& all) {
   // The filter: every anchor in capture order (the camera first at a tie).
-  std::vector<std::pair<Modality, const GeometricAnchor*>> ordered;
-  for (std::size_t m = 0; m < all.size(); ++m)
-    for (const GeometricAnchor& a : all[m])
-      if (a.kind != GeometricAnchor::Kind::kNone)
-        ordered.emplace_back(static_cast<Modality>(m), &a);
-  std::stable_sort(ordered.begin(), ordered.end(),
-                   [](const auto& a, const auto& b) { return a.second->t_s < b.second->t_s; });
-  for (const auto& [m, a] : ordered) filter_.Observe(m, *a);
+  filter_.ObserveWindow(all);
   std::array<GeometricAnchor, kModalityCount> arrived;
   for (std::size_t m = 0; m < all.size(); ++m)
     for (const GeometricAnchor& a : all[m])

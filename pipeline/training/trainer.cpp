@@ -358,8 +358,10 @@ std::vector<AnchorWindow> TrackAnchors(const WindowSequence& s, std::int64_t sta
 // normalised positions [1, K, 3].
 torch::Tensor ForwardSequence(UavLocModel& model, const WindowSequence& s,
                               const torch::Tensor& mask) {
+  const torch::Tensor latents = (s.latents * mask.unsqueeze(2)).unsqueeze(0);
+  if (!model->config().anchored) return model->forward(latents, mask.unsqueeze(0));
   const AnchorBatch anchors = StackAnchors({TrackAnchors(s, 0, mask, model->config())});
-  return model->forward((s.latents * mask.unsqueeze(2)).unsqueeze(0), mask.unsqueeze(0), &anchors);
+  return model->forward(latents, mask.unsqueeze(0), &anchors);
 }
 
 // The candidates' offsets from the truth over the training sequences as
@@ -452,11 +454,13 @@ CropBatch DrawCrops(const std::vector<WindowSequence>& train, int batch, std::in
     if (keep.sum().item<double>() < 0.5) keep.fill_(1.0);  // never drop all three
     m = m * keep * (torch::rand({k, kModalityCount}) >= o.window_dropout).to(m.dtype());
     lat.push_back(s.latents.narrow(0, start, k) * m.unsqueeze(2));
-    anchors.push_back(TrackAnchors(s, start, m, config));
+    if (config.anchored) anchors.push_back(TrackAnchors(s, start, m, config));
     mask.push_back(m);
     y.push_back(s.truth.narrow(0, start, k));
   }
-  return {{torch::stack(lat), torch::stack(mask)}, StackAnchors(anchors), torch::stack(y)};
+  return {{torch::stack(lat), torch::stack(mask)},
+          config.anchored ? StackAnchors(anchors) : AnchorBatch{},
+          torch::stack(y)};
 }
 
 UavLocModel TrainFusion(const std::vector<WindowSequence>& train,
@@ -464,7 +468,7 @@ UavLocModel TrainFusion(const std::vector<WindowSequence>& train,
                         const TrainOptions& o, const std::string& checkpoint, StageReport& report) {
   const auto start = Clock::now();
   UavLocModel model(config);
-  report.name = "fusion";
+  report.name = config.anchored ? "fusion_anchored" : "fusion";
   report.train_items = train.size();
   report.validation_items = val.size();
   report.initial_validation_loss = FusionValidationLoss(model, val);
@@ -478,7 +482,10 @@ UavLocModel TrainFusion(const std::vector<WindowSequence>& train,
   const std::int64_t steps = std::max<std::int64_t>(
       o.stage2_min_steps_per_epoch, 2 * windows / (k * static_cast<std::int64_t>(o.stage2_batch)));
   RunEpochs(
-      *model, o.stage2_max_epochs, o.stage2_patience, "train stage 2: fusion + Mamba", o.quiet,
+      *model, o.stage2_max_epochs, o.stage2_patience,
+      config.anchored ? "train stage 2: fusion + Mamba, anchored head"
+                      : "train stage 2: fusion + Mamba, paper head",
+      o.quiet,
       [&] {
         for (std::int64_t step = 0; step < steps; ++step) {
           const CropBatch b = DrawCrops(train, o.stage2_batch, k, o, config);
@@ -486,7 +493,8 @@ UavLocModel TrainFusion(const std::vector<WindowSequence>& train,
           adam.zero_grad();
           torch::Tensor log_w, hypotheses;
           const torch::Tensor y_hat =
-              model->forward(b.fusion.latents, b.fusion.mask, &b.anchors, &log_w, &hypotheses);
+              model->forward(b.fusion.latents, b.fusion.mask,
+                             config.anchored ? &b.anchors : nullptr, &log_w, &hypotheses);
           torch::Tensor loss = config.anchored && o.mixture_loss
                                    ? MixtureMse(log_w, hypotheses, b.truth, b.fusion.mask)
                                    : MaskedMse(y_hat, b.truth, b.fusion.mask);
@@ -572,6 +580,7 @@ void TrainOptions::Validate() const {
   };
   require(latent_dim >= 2 && latent_dim % 2 == 0, "latent_dim", "must be even and >= 2");
   require(window_s > 0 && std::isfinite(window_s), "window_s", "must be > 0");
+  require(paper_head || anchored_head, "paper_head", "or anchored_head must be set");
 }
 
 TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& o, const ModelManifest& manifest,
@@ -609,30 +618,45 @@ TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& o, const ModelM
   config.window_s = o.window_s;
   config.d_model = o.d_model;
   config.layers = o.layers;
-  config.anchored = o.anchored;
   config.position_centre_m = norm.centre_m;
   config.position_scale_m = norm.scale_m;
   const TeAlign align(config.te_align());
   const std::vector<WindowSequence> train = AlignAll(data.train, encoders, align, norm);
   const std::vector<WindowSequence> val = AlignAll(data.validation, encoders, align, norm);
-  if (o.anchored && o.offset_calibration_radius_m > 0.0) {
-    config.candidate_offset_m = CandidateOffsets(train, config, o.offset_calibration_radius_m);
-    report.candidate_offset_m = config.candidate_offset_m;
-  }
-  StageReport fusion_stage;
-  UavLocModel model =
-      TrainFusion(train, val, config, o, (checkpoints / manifest.edge).string(), fusion_stage);
-  report.stages.push_back(fusion_stage);
-  if (!data.test.empty()) report.test = Evaluate(model, AlignAll(data.test, encoders, align, norm));
+  const std::vector<WindowSequence> test = data.test.empty()
+                                               ? std::vector<WindowSequence>{}
+                                               : AlignAll(data.test, encoders, align, norm);
 
   ModelManifest m = manifest;
   m.latent_dim = o.latent_dim;
   m.window_s = o.window_s;
   m.training = static_cast<const TrainingConfig&>(o);
+  m.edge = o.paper_head ? "uavloc.pt" : "";
+  m.anchored_edge = o.anchored_head ? "uavloc_anchored.pt" : "";
+  // Each head from the generator state stage 1 left (trained alone or
+  // beside the other, the same head).
+  at::Generator generator = at::detail::getDefaultCPUGenerator();
+  const torch::Tensor generator_state = generator.get_state();
+  for (const bool anchored : {false, true}) {
+    if (!(anchored ? o.anchored_head : o.paper_head)) continue;
+    generator.set_state(generator_state);
+    UavLocModelConfig head = config;
+    head.anchored = anchored;
+    if (anchored && o.offset_calibration_radius_m > 0.0) {
+      head.candidate_offset_m = CandidateOffsets(train, head, o.offset_calibration_radius_m);
+      report.candidate_offset_m = head.candidate_offset_m;
+    }
+    const std::string& file = anchored ? m.anchored_edge : m.edge;
+    StageReport stage;
+    UavLocModel model = TrainFusion(train, val, head, o, (checkpoints / file).string(), stage);
+    report.stages.push_back(stage);
+    if (!test.empty()) report.test[anchored ? "uavloc_anchored" : "uavloc"] = Evaluate(model, test);
+    SaveUavLocModel(model, (out / file).string());
+  }
+
   const std::string* names[kModalityCount] = {&m.camera, &m.lidar, &m.radar};
   for (int i = 0; i < kModalityCount; ++i)
     SaveIbCcModel(encoders[static_cast<std::size_t>(i)], (out / *names[i]).string(), m.note);
-  SaveUavLocModel(model, (out / m.edge).string());
   fs::remove_all(checkpoints);
   {
     const std::string text = ReportJson(report, o);
@@ -646,16 +670,26 @@ TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& o, const ModelM
   return report;
 }
 
-Evaluation EvaluateModel(const std::string& model_path, const std::vector<Episode>& episodes) {
+std::map<std::string, Evaluation> EvaluateModel(const std::string& model_path,
+                                                const std::vector<Episode>& episodes) {
   const std::string manifest_path = ModelManifestPath(model_path);
   const ModelManifest m = ReadModelManifest(manifest_path);
   const fs::path folder = fs::path(manifest_path).parent_path();
   std::vector<IbCcModel> encoders;
   for (const std::string* name : {&m.camera, &m.lidar, &m.radar})
     encoders.push_back(LoadIbCcModel((folder / *name).string()));
-  UavLocModel model = LoadUavLocModel((folder / m.edge).string());
   const IbNormalization& norm = encoders.front()->config().normalization;
-  return Evaluate(model, AlignAll(episodes, encoders, model->te_align(), norm));
+  const EdgeHeads heads = ReadEdgeHeads(m, manifest_path);
+  std::map<std::string, Evaluation> out;
+  std::vector<WindowSequence> sequences;
+  for (const auto& [method, path] :
+       {std::pair{"uavloc", &heads.paper}, std::pair{"uavloc_anchored", &heads.anchored}}) {
+    if (path->empty()) continue;
+    UavLocModel model = LoadUavLocModel(*path);
+    if (sequences.empty()) sequences = AlignAll(episodes, encoders, model->te_align(), norm);
+    out[method] = Evaluate(model, sequences);
+  }
+  return out;
 }
 
 std::string ReportJson(const TrainReport& r, const TrainOptions& o) {
@@ -663,8 +697,11 @@ std::string ReportJson(const TrainReport& r, const TrainOptions& o) {
   j["seed"] = o.seed;
   j["latent_dim"] = o.latent_dim;
   j["bottleneck"] = o.bottleneck == IbBottleneck::kIb ? "ib" : "mlp";
-  j["head"] = o.anchored ? "anchored" : "paper";
-  if (o.anchored) {
+  core::Json heads = core::Json::array();
+  if (o.paper_head) heads.push_back("paper");
+  if (o.anchored_head) heads.push_back("anchored");
+  j["heads"] = heads;
+  if (o.anchored_head) {
     j["selection_loss"] = {{"weight", o.selection_weight},
                            {"radius_m", o.selection_radius_m},
                            {"filter_preference_m", o.filter_preference_m}};
@@ -689,7 +726,9 @@ std::string ReportJson(const TrainReport& r, const TrainOptions& o) {
                       {"best_validation_loss", s.best_validation_loss},
                       {"seconds", s.seconds}});
   j["stages"] = stages;
-  j["test"] = EvaluationJson(r.test);
+  core::Json test = core::Json::object();
+  for (const auto& [method, ev] : r.test) test[method] = EvaluationJson(ev);
+  j["test"] = test;
   return j.dump(2) + "\n";
 }
 

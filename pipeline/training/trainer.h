@@ -4,7 +4,12 @@
 //            decoder) on that modality's observations: L = MSE + beta KL
 //   stage 2  the edge network (TE-Align, MADW, MICA, Mamba, head) on the
 //            sequences of windows of the stage-1 encoders' mu latents that
-//            arrived on time, with random modality dropout; L = masked MSE
+//            arrived on time, with random modality dropout; L = masked MSE.
+//            Once per edge head asked for, on the same encoders: the
+//            paper's linear head (method `uavloc`) and our anchored head
+//            (`uavloc_anchored`, pipeline/anchored/), each from the
+//            generator state stage 1 left, so a head is the same whether
+//            trained alone or beside the other.
 //
 // Adam, early stopping on the validation split, the best weights kept and
 // checkpointed, deterministic for a seed and thread count. Torch-free header.
@@ -34,21 +39,23 @@ struct TrainOptions : TrainingConfig {
   // The node's compressor: the paper's IB head, or its MLP baseline of equal
   // depth and parameter count (the Sec. VI ablation).
   IbBottleneck bottleneck = IbBottleneck::kIb;
-  // The edge head: anchored (default; pipeline/anchored/anchors.h, measured in
-  // NOTES.md) or the paper's plain linear head (false).
-  bool anchored = true;
+  // The edge heads to train (at least one): the paper's linear head and our
+  // anchored head (pipeline/anchored/anchors.h, measured in NOTES.md).
+  bool paper_head = true;
+  bool anchored_head = true;
   // Called before every optimisation step; may throw to stop training
   // (the CLI's Ctrl-C). Empty: never stops.
   std::function<void()> check_stop;
 
   // Throws std::invalid_argument naming the first bad field: the
-  // TrainingConfig rules (training_config.h), then latent_dim (even, >= 2)
-  // and window_s (> 0).
+  // TrainingConfig rules (training_config.h), then latent_dim (even, >= 2),
+  // window_s (> 0) and the heads (at least one).
   void Validate() const;
 };
 
 struct StageReport {
-  std::string name;                                   // "camera", "lidar", "radar", "fusion"
+  // "camera", "lidar", "radar"; "fusion" (the paper's head), "fusion_anchored"
+  std::string name;
   std::size_t train_items = 0, validation_items = 0;  // samples or sequences
   std::size_t label_gated_items = 0;  // stage 1: observations left out (not the target)
   int epochs = 0;                     // run before stopping
@@ -70,7 +77,9 @@ struct Evaluation {
 struct TrainReport {
   std::vector<StageReport> stages;
   std::vector<Eigen::Vector3d> candidate_offset_m;  // empty: not calibrated
-  Evaluation test;                                  // on the held-out test split
+  // On the held-out test split, per head trained, by its method's name
+  // ("uavloc", "uavloc_anchored").
+  std::map<std::string, Evaluation> test;
 };
 
 // Trains on `data` and writes the model folder `out_dir` (model.json from
@@ -86,8 +95,10 @@ struct TrainReport {
 TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& options,
                         const ModelManifest& manifest, const std::string& out_dir);
 
-// Evaluates a saved model on episodes. Call InitTorch() first.
-Evaluation EvaluateModel(const std::string& model_path, const std::vector<Episode>& episodes);
+// Evaluates each edge head of a saved model on episodes, by method name as
+// in TrainReport::test. Call InitTorch() first.
+std::map<std::string, Evaluation> EvaluateModel(const std::string& model_path,
+                                                const std::vector<Episode>& episodes);
 
 // The report as JSON text (training_report.json).
 std::string ReportJson(const TrainReport& report, const TrainOptions& options);

@@ -23,8 +23,10 @@ namespace {
 namespace fs = std::filesystem;
 
 // A complete model folder with untrained parts: encoders of latent size
-// `z_encoders`, an edge network of `z_edge`, a manifest saying `z_manifest`.
-std::string ModelFolder(const std::string& tag, int z_encoders, int z_edge, int z_manifest) {
+// `z_encoders`, the paper's edge head of `z_edge` (and with `anchored` the
+// anchored one too, uavloc_anchored.pt), a manifest saying `z_manifest`.
+std::string ModelFolder(const std::string& tag, int z_encoders, int z_edge, int z_manifest,
+                        bool anchored = false) {
   const std::string dir = testing::TempDir(tag);
   for (Modality m : {Modality::kCamera, Modality::kLidar, Modality::kRadar}) {
     IbCcConfig c;
@@ -40,6 +42,11 @@ std::string ModelFolder(const std::string& tag, int z_encoders, int z_edge, int 
   edge.layers = 1;
   SaveUavLocModel(UavLocModel(edge), dir + "/uavloc.pt");
   ModelManifest manifest;
+  if (anchored) {
+    edge.anchored = true;
+    SaveUavLocModel(UavLocModel(edge), dir + "/uavloc_anchored.pt");
+    manifest.anchored_edge = "uavloc_anchored.pt";
+  }
   manifest.note = "model_bundle_test";
   manifest.latent_dim = z_manifest;
   WriteModelManifest(manifest, dir + "/model.json");
@@ -80,6 +87,20 @@ TEST_CASE("ModelBundle: the manifest round trips and is read strictly", "[pipeli
   CHECK(r.lidar == "lidar.json");
   CHECK(r.radar == "radar.json");
   CHECK(r.edge == "edge.pt");
+  CHECK(r.anchored_edge.empty());  // absent: no anchored head
+
+  // Either edge head may be absent, not both.
+  m.edge = "";
+  m.anchored_edge = "anchored.pt";
+  WriteModelManifest(m, path);
+  CHECK(ReadModelManifest(path).edge.empty());
+  CHECK(ReadModelManifest(path).anchored_edge == "anchored.pt");
+  m.anchored_edge = "";
+  WriteModelManifest(m, path);
+  std::string none = testing::ConfigErrorOf([&] { ReadModelManifest(path); });
+  CHECK_THAT(none, Catch::Contains(path));
+  CHECK_THAT(none, Catch::Contains("/edge"));
+  CHECK_THAT(none, Catch::Contains("no edge network"));
 
   const std::string bad = dir + "/bad.json";
   testing::WriteFile(bad, "{\"format\": \"uavsim-model/1\", \"latent_dimm\": 8}\n");
@@ -118,8 +139,46 @@ TEST_CASE("ModelBundle: Load reads a complete folder by folder or manifest", "[p
       CHECK(files->encoder(m).modality() == m);
       CHECK(files->encoder(m).latent_dim() == 8);
     }
-    CHECK(files->edge().latent_dim() == 8);
+    CHECK(files->heads().paper == (fs::path(dir) / "uavloc.pt").string());
+    CHECK(files->heads().anchored.empty());
+    const auto edge = files->LoadEdge(false);
+    CHECK(edge->latent_dim() == 8);
+    CHECK_FALSE(edge->anchored());
+    // No anchored head: asking for it names the manifest's key.
+    const std::string what = testing::ConfigErrorOf([&] { files->LoadEdge(true); });
+    CHECK_THAT(what, Catch::Contains(files->manifest_path()));
+    CHECK_THAT(what, Catch::Contains("/anchored_edge"));
+    CHECK_THAT(what, Catch::Contains("uavloc_anchored"));
   }
+}
+
+TEST_CASE("ModelBundle: each edge head is served by what its sidecar says it is", "[pipeline]") {
+  InitTorch(1, 54);
+  const std::string dir = ModelFolder("bundle-heads", 8, 8, 8, true);
+  auto files = UavLocModelFiles::Load(dir);
+  CHECK_FALSE(files->LoadEdge(false)->anchored());
+  CHECK(files->LoadEdge(true)->anchored());
+
+  // A model from before the anchored head had its own key: `edge` holds the
+  // anchored head, which serves uavloc_anchored; there is no paper head.
+  ModelManifest m = ReadModelManifest(dir + "/model.json");
+  m.edge = "uavloc_anchored.pt";
+  m.anchored_edge = "";
+  WriteModelManifest(m, dir + "/model.json");
+  files = UavLocModelFiles::Load(dir);
+  CHECK(files->heads().paper.empty());
+  CHECK(files->heads().anchored == (fs::path(dir) / "uavloc_anchored.pt").string());
+  CHECK(files->LoadEdge(true)->anchored());
+  CHECK_THAT(testing::ConfigErrorOf([&] { files->LoadEdge(false); }),
+             Catch::Contains("no paper head"));
+
+  // Two files of one head: refused, naming both.
+  m.edge = "uavloc.pt";
+  m.anchored_edge = "uavloc.pt";
+  WriteModelManifest(m, dir + "/model.json");
+  const std::string what = testing::ConfigErrorOf([&] { UavLocModelFiles::Load(dir); });
+  CHECK_THAT(what, Catch::Contains("/anchored_edge"));
+  CHECK_THAT(what, Catch::Contains("two edge networks"));
 }
 
 TEST_CASE("ModelBundle: Load names the manifest and key of a missing part", "[pipeline]") {

@@ -165,6 +165,42 @@ TEST_CASE("CLI: a model whose files changed since training is refused, naming th
   CHECK(!fs::exists(dir + "/run"));
 }
 
+TEST_CASE("CLI: a method whose edge head the model lacks is refused, naming the method", "[sim]") {
+  // The shipped model without its paper head (as models trained with
+  // `--head anchored` are): uavloc and its single-modality rows need it,
+  // uavloc_anchored and anchor_track do not.
+  const std::string dir = TempDir("no-paper-head");
+  fs::copy(std::string(UAVSIM_SOURCE_DIR) + "/models/default", dir + "/m",
+           fs::copy_options::recursive);
+  fs::remove(dir + "/m/uavloc.pt");
+  fs::remove(dir + "/m/uavloc.pt.json");
+  fs::remove(dir + "/m/checksums.sha256");  // a folder without checksums loads unchecked
+  Json manifest = Json::parse(ReadFile(dir + "/m/model.json"));
+  manifest["edge"] = "";
+  WriteFile(dir + "/m/model.json", manifest.dump(2));
+  const std::string model = "/pipeline/model=" + dir + "/m";
+  for (const char* command : {"validate", "run"}) {
+    INFO(command);
+    std::vector<std::string> args{command, kDefault, "--set", model};
+    if (std::string(command) == "run")
+      args.insert(args.end(), {"--duration", "1", "--quiet", "--out", dir + "/run"});
+    const auto r = RunCli(args);
+    CHECK(r.exit_code == 2);
+    CHECK(CountLines(r.err) == 1);
+    CHECK_THAT(r.err, Catch::StartsWith(kDefault + ": /pipeline/methods/0: the model "));
+    CHECK_THAT(r.err, Catch::Contains("has no paper head for `uavloc`"));
+    CHECK(!fs::exists(dir + "/run"));
+  }
+  const auto single = RunCli({"validate", kDefault, "--set", model, "--set",
+                              "/pipeline/methods=[\"ekf\", \"uavloc_radar\"]"});
+  CHECK(single.exit_code == 2);
+  CHECK_THAT(single.err, Catch::Contains("/pipeline/methods/1"));
+  const auto ok = RunCli({"validate", kDefault, "--set", model, "--set",
+                          "/pipeline/methods=[\"uavloc_anchored\", \"anchor_track\", \"ekf\"]"});
+  INFO(ok.err);
+  CHECK(ok.exit_code == 0);
+}
+
 TEST_CASE("CLI: inputs that are not regular files are refused at once, naming the limit",
           "[sim][slow]") {
   // /dev/zero used to be read until memory ran out, a FIFO to block until
@@ -262,10 +298,15 @@ TEST_CASE("CLI: run writes the run directory of DESIGN.md", "[sim][slow]") {
   CHECK(ReadFile(out + "/estimates.csv").rfind("t_s,method,x_m,y_m,z_m\n", 0) == 0);
   CHECK(metrics["rmse_m"].contains("ekf"));
   CHECK(rates.find(",ekf,") != std::string::npos);
-  // The learned pipeline with the shipped model: estimates, RMSE and beam.
-  CHECK(metrics["rmse_m"].contains("uavloc"));
-  CHECK(rates.find(",uavloc,") != std::string::npos);
+  // The paper's pipeline and our anchored head with the shipped model, and
+  // the anchor filter alone: estimates, RMSE and beam.
+  for (const char* method : {"uavloc", "uavloc_anchored", "anchor_track"}) {
+    INFO(method);
+    CHECK(metrics["rmse_m"].contains(method));
+    CHECK(rates.find("," + std::string(method) + ",") != std::string::npos);
+  }
   CHECK(metrics["uavloc_model"]["same_layout"] == true);
+  CHECK(metrics["uavloc_model"]["heads"] == Json::array({"paper", "anchored"}));
 
   // Where the time went: every node's capture, pre-processing and encoding,
   // each method, the beams, the writing; "other" is the rest of wall_s, so
@@ -282,7 +323,8 @@ TEST_CASE("CLI: run writes the run directory of DESIGN.md", "[sim][slow]") {
       CHECK(profile.contains("node/" + node["id"].get<std::string>() + "/" + part));
   // A node encodes what it found (the LiDAR may find nothing in 3 s).
   CHECK(profile.contains("node/cam1/encode"));
-  for (const char* part : {"setup", "edge/uavloc", "edge/ekf", "beams", "write", "other"})
+  for (const char* part : {"setup", "edge/uavloc", "edge/uavloc_anchored", "edge/anchor_track",
+                           "edge/ekf", "beams", "write", "other"})
     CHECK(profile.contains(part));
   double sum = 0.0;
   for (const auto& [part, seconds] : profile.items()) {
@@ -297,7 +339,8 @@ TEST_CASE("CLI: run writes the run directory of DESIGN.md", "[sim][slow]") {
   const Json manifest = Json::parse(ReadFile(out + "/manifest.json"));
   CHECK(manifest["seed"] == 1);
   CHECK(manifest["uavsim_version"] == "0.1.0");
-  CHECK(manifest["scenario"]["pipeline"]["methods"] == Json::array({"uavloc", "ekf"}));
+  CHECK(manifest["scenario"]["pipeline"]["methods"] ==
+        Json::array({"uavloc", "uavloc_anchored", "anchor_track", "ekf"}));
   CHECK(manifest["scenario"]["links"]["default"]["mtu_bytes"] == 1500);
 
   // `uavsim report` redraws the report from the files alone: the same bytes

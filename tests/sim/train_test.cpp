@@ -16,6 +16,7 @@
 #include <sstream>
 #include <thread>
 #include <tuple>
+#include <utility>
 
 #include "pipeline/model_bundle.h"
 #include "pipeline/torch_runtime.h"
@@ -59,23 +60,33 @@ TEST_CASE("CLI: train --quick learns, is deterministic, and its model runs in th
   CHECK(r.out.empty());
   for (const char* f :
        {"model.json", "camera.json", "camera.pt", "lidar.json", "lidar.pt", "radar.json",
-        "radar.pt", "uavloc.pt", "uavloc.pt.json", "training_report.json", "checksums.sha256"})
+        "radar.pt", "uavloc.pt", "uavloc.pt.json", "uavloc_anchored.pt", "uavloc_anchored.pt.json",
+        "training_report.json", "checksums.sha256"})
     CHECK(fs::exists(model + "/" + f));
   CHECK_FALSE(fs::exists(model + "/checkpoints"));
   CHECK(fs::exists(data));
 
   // The whole model (fusion + Mamba on the stage-1 latents) on held-out
-  // validation trajectories: at least 10x below its untrained loss (issue
-  // 6). Measured 11x (1.36 -> 0.12) on the 3 validation episodes of 17;
-  // with 12 episodes (2 for validation) 9.4x-12x between trainings that
-  // differed little, 7.2x with the first anchored head.
+  // validation trajectories, far below its untrained loss. The anchored
+  // head: at least 10x (issue 6); measured 11x (1.28 -> 0.117) on the 3
+  // validation episodes of 17; with 12 episodes (2 for validation) 9.4x-12x
+  // between trainings that differed little. The paper's head starts higher
+  // (its untrained output is the flight region's centre, the anchored one's
+  // near a candidate) and measured 8.4x (3.28 -> 0.391; its 10x at toy size
+  // is trainer_test.cpp's): at least 5x.
   const Json report = Json::parse(ReadFile(model + "/training_report.json"));
-  const Json& fusion = Stage(report, "fusion");
   INFO(report.dump(2));
-  CHECK(report["head"] == "anchored");
+  CHECK(report["heads"] == Json::array({"paper", "anchored"}));
   CHECK(report["position_loss"] == "mixture");
-  CHECK(fusion["best_validation_loss"].get<double>() * 10.0 <=
-        fusion["initial_validation_loss"].get<double>());
+  for (const auto& [stage, factor] :
+       {std::pair{"fusion", 5.0}, std::pair{"fusion_anchored", 10.0}}) {
+    INFO(stage);
+    const Json& fusion = Stage(report, stage);
+    CHECK(fusion["best_validation_loss"].get<double>() * factor <=
+          fusion["initial_validation_loss"].get<double>());
+  }
+  for (const char* method : {"uavloc", "uavloc_anchored"})
+    CHECK(report["test"][method]["all"]["rmse_m"].is_number());
   CHECK(Stage(report, "camera")["best_validation_loss"].get<double>() <
         Stage(report, "camera")["initial_validation_loss"].get<double>());
   const Json manifest = Json::parse(ReadFile(model + "/model.json"));
@@ -102,7 +113,7 @@ TEST_CASE("CLI: train --quick learns, is deterministic, and its model runs in th
   };
   short_training(dir + "/once");
   short_training(dir + "/again");
-  for (const char* f : {"camera.pt", "lidar.pt", "radar.pt", "uavloc.pt"}) {
+  for (const char* f : {"camera.pt", "lidar.pt", "radar.pt", "uavloc.pt", "uavloc_anchored.pt"}) {
     INFO(f);
     CHECK(ReadFile(dir + "/once/" + f) == ReadFile(dir + "/again/" + f));
     CHECK(ReadFile(dir + "/once/" + f) != ReadFile(model + "/" + f));  // it did train less
@@ -112,24 +123,31 @@ TEST_CASE("CLI: train --quick learns, is deterministic, and its model runs in th
   CHECK(exists.exit_code == 2);
   CHECK_THAT(exists.err, Catch::Contains("already exists"));
 
-  // The trained model in the loop: uavloc estimates, RMSE and beam.
+  // The trained model in the loop: every method estimates, with an RMSE
+  // and a beam (the scenario's default methods: both heads, the anchor
+  // filter alone, the EKF).
   const std::string run = dir + "/run";
   auto rr = RunCli({"run", kDefault, "--out", run, "--duration", "5.9", "--quiet", "--set",
                     "/pipeline/model=" + model});
   INFO(rr.err);
   REQUIRE(rr.exit_code == 0);
   const Json metrics = Json::parse(ReadFile(run + "/metrics.json"));
-  REQUIRE(metrics["rmse_m"]["uavloc"].is_number());
-  CHECK(std::isfinite(metrics["rmse_m"]["uavloc"].get<double>()));
-  CHECK(metrics["estimated_windows"]["uavloc"].get<int>() > 0);
+  for (const char* method : {"uavloc", "uavloc_anchored", "anchor_track", "ekf"}) {
+    INFO(method);
+    REQUIRE(metrics["rmse_m"][method].is_number());
+    CHECK(std::isfinite(metrics["rmse_m"][method].get<double>()));
+    CHECK(metrics["estimated_windows"][method].get<int>() > 0);
+    CHECK(ReadFile(run + "/estimates.csv").find("," + std::string(method) + ",") !=
+          std::string::npos);
+    CHECK(ReadFile(run + "/rate_snr.csv").find("," + std::string(method) + ",") !=
+          std::string::npos);
+  }
   CHECK(metrics["uavloc_model"]["same_layout"] == true);
-  CHECK(metrics["uavloc_model"]["head"] == "anchored");  // the default of uavsim train
-  CHECK(ReadFile(run + "/estimates.csv").find(",uavloc,") != std::string::npos);
-  CHECK(ReadFile(run + "/rate_snr.csv").find(",uavloc,") != std::string::npos);
+  CHECK(metrics["uavloc_model"]["heads"] == Json::array({"paper", "anchored"}));
 
-  // rmse_common_m: each method's RMSE over the windows both estimated,
-  // recomputed here from truth.csv and estimates.csv (a 5.9 s run: every
-  // window end, 0.2 ... 5.8 s, is a truth row).
+  // rmse_common_m: each method's RMSE over the windows every method
+  // estimated, recomputed here from truth.csv and estimates.csv (a 5.9 s
+  // run: every window end, 0.2 ... 5.8 s, is a truth row).
   std::map<long, Eigen::Vector3d> truth;  // by time in ms
   std::map<std::string, std::map<long, Eigen::Vector3d>> est;
   const auto rows = [](const std::string& text) {
@@ -145,18 +163,20 @@ TEST_CASE("CLI: train --quick learns, is deterministic, and its model runs in th
     truth[ms(c[0])] = {std::stod(c[1]), std::stod(c[2]), std::stod(c[3])};
   for (const auto& c : rows(ReadFile(run + "/estimates.csv")))
     est[c[1]][ms(c[0])] = {std::stod(c[2]), std::stod(c[3]), std::stod(c[4])};
+  const std::vector<std::string> methods{"uavloc", "uavloc_anchored", "anchor_track", "ekf"};
+  REQUIRE(est.size() == methods.size());
   std::map<std::string, double> sum_sq;
   std::uint64_t common = 0;
   for (const auto& [t, p] : est["uavloc"]) {
-    const auto e = est["ekf"].find(t);
-    if (e == est["ekf"].end()) continue;
+    if (!std::all_of(methods.begin(), methods.end(),
+                     [&](const std::string& m) { return est[m].count(t) == 1; }))
+      continue;
     ++common;
-    sum_sq["uavloc"] += (p - truth.at(t)).squaredNorm();
-    sum_sq["ekf"] += (e->second - truth.at(t)).squaredNorm();
+    for (const std::string& m : methods) sum_sq[m] += (est[m][t] - truth.at(t)).squaredNorm();
   }
   CHECK(metrics["common_windows"].get<std::uint64_t>() == common);
   if (common > 0) {
-    for (const char* m : {"uavloc", "ekf"})
+    for (const std::string& m : methods)
       CHECK(metrics["rmse_common_m"][m].get<double>() ==
             Approx(std::sqrt(sum_sq[m] / static_cast<double>(common))).epsilon(1e-5));
   } else {
@@ -350,16 +370,20 @@ TEST_CASE("The default model: three modalities beat each single one on held-out 
   plan.episode_s = 20.0;
   plan.vary_weather = false;
   const auto episodes = uavsim::sim::SimulateEpisodes(base, plan, true);
-  const auto ev = uavsim::pipeline::EvaluateModel(uavsim::pipeline::DefaultModelPath(), episodes);
-  std::string summary;
-  for (const auto& [k, v] : ev.rmse_m)
-    summary += k + " " + std::to_string(v) + " m over " + std::to_string(ev.windows.at(k)) + "; ";
-  INFO(summary);
-  REQUIRE(std::isfinite(ev.rmse_m.at("all")));
-  CHECK(ev.windows.at("all") > 200);
-  for (const char* single : {"camera", "lidar", "radar"}) {
-    INFO(single << " " << ev.rmse_m.at(single) << " m, all " << ev.rmse_m.at("all") << " m");
-    CHECK(ev.rmse_m.at("all") < ev.rmse_m.at(single));
+  const auto evaluations =
+      uavsim::pipeline::EvaluateModel(uavsim::pipeline::DefaultModelPath(), episodes);
+  REQUIRE(evaluations.size() == 2);  // both heads ship
+  for (const auto& [method, ev] : evaluations) {
+    std::string summary = method + ": ";
+    for (const auto& [k, v] : ev.rmse_m)
+      summary += k + " " + std::to_string(v) + " m over " + std::to_string(ev.windows.at(k)) + "; ";
+    INFO(summary);
+    REQUIRE(std::isfinite(ev.rmse_m.at("all")));
+    CHECK(ev.windows.at("all") > 200);
+    for (const char* single : {"camera", "lidar", "radar"}) {
+      INFO(single << " " << ev.rmse_m.at(single) << " m, all " << ev.rmse_m.at("all") << " m");
+      CHECK(ev.rmse_m.at("all") < ev.rmse_m.at(single));
+    }
   }
 }
 

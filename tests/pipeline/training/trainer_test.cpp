@@ -213,7 +213,8 @@ TEST_CASE("Trainer: writes a complete model folder and an honest report", "[pipe
   const Dataset& data = Synthetic();
   for (const char* name :
        {"model.json", "camera.json", "camera.pt", "lidar.json", "lidar.pt", "radar.json",
-        "radar.pt", "uavloc.pt", "uavloc.pt.json", "training_report.json"}) {
+        "radar.pt", "uavloc.pt", "uavloc.pt.json", "uavloc_anchored.pt", "uavloc_anchored.pt.json",
+        "training_report.json"}) {
     INFO(name);
     CHECK(fs::is_regular_file(fs::path(t.dir) / name));
   }
@@ -223,9 +224,9 @@ TEST_CASE("Trainer: writes a complete model folder and an honest report", "[pipe
 
   // The stages, in order, with what they saw.
   const TrainOptions o = Tiny();
-  REQUIRE(t.report.stages.size() == 4);
-  const char* names[] = {"camera", "lidar", "radar", "fusion"};
-  for (int i = 0; i < 4; ++i) {
+  REQUIRE(t.report.stages.size() == 5);
+  const char* names[] = {"camera", "lidar", "radar", "fusion", "fusion_anchored"};
+  for (int i = 0; i < 5; ++i) {
     const StageReport& s = t.report.stages[static_cast<std::size_t>(i)];
     INFO(names[i]);
     CHECK(s.name == names[i]);
@@ -257,22 +258,35 @@ TEST_CASE("Trainer: writes a complete model folder and an honest report", "[pipe
                           << fusion.best_validation_loss << " at epoch " << fusion.best_epoch);
   CHECK(fusion.initial_validation_loss > 0.0);
   CHECK(fusion.best_validation_loss <= fusion.initial_validation_loss);
+  // Each head evaluated on the held-out split under its method's name.
+  CHECK(t.report.test.size() == 2);
+  CHECK(t.report.test.count("uavloc") == 1);
+  CHECK(t.report.test.count("uavloc_anchored") == 1);
 
   // training_report.json says the same.
   const core::Json j = core::Json::parse(testing::ReadFile(t.dir + "/training_report.json"));
   CHECK(j.at("seed").get<std::uint64_t>() == kSeed);
   CHECK(j.at("latent_dim").get<int>() == 8);
-  REQUIRE(j.at("stages").size() == 4);
+  REQUIRE(j.at("stages").size() == 5);
   CHECK(j.at("stages")[3].at("name") == "fusion");
   CHECK(j.at("stages")[3].at("best_validation_loss").get<double>() == fusion.best_validation_loss);
-  REQUIRE(j.at("test").contains("all"));
-  CHECK(j.at("test").at("all").at("rmse_m").is_number());
+  CHECK(j.at("stages")[4].at("name") == "fusion_anchored");
+  CHECK(j.at("heads") == core::Json::array({"paper", "anchored"}));
+  for (const char* method : {"uavloc", "uavloc_anchored"}) {
+    INFO(method);
+    REQUIRE(j.at("test").at(method).contains("all"));
+    CHECK(j.at("test").at(method).at("all").at("rmse_m").get<double>() ==
+          t.report.test.at(method).rmse_m.at("all"));
+  }
   // The candidates' calibrated offsets: one per candidate, each the median
   // of offsets within the radius (so within it), in the report and the
   // edge model's sidecar alike.
   REQUIRE(t.report.candidate_offset_m.size() == static_cast<std::size_t>(kAnchorCandidates));
   REQUIRE(j.at("candidate_offset_m").size() == static_cast<std::size_t>(kAnchorCandidates));
-  const core::Json sidecar = core::Json::parse(testing::ReadFile(t.dir + "/uavloc.pt.json"));
+  const core::Json sidecar =
+      core::Json::parse(testing::ReadFile(t.dir + "/uavloc_anchored.pt.json"));
+  CHECK(sidecar.at("anchored") == true);
+  CHECK(core::Json::parse(testing::ReadFile(t.dir + "/uavloc.pt.json")).at("anchored") == false);
   for (std::size_t c = 0; c < static_cast<std::size_t>(kAnchorCandidates); ++c) {
     const Eigen::Vector3d& v = t.report.candidate_offset_m[c];
     CHECK(v.norm() <= std::sqrt(3.0) * o.offset_calibration_radius_m);
@@ -289,6 +303,8 @@ TEST_CASE("Trainer: writes a complete model folder and an honest report", "[pipe
   CHECK(m.layout_hash == "0123abcd");
   CHECK(m.latent_dim == 8);
   CHECK(m.window_s == kWindow);
+  CHECK(m.edge == "uavloc.pt");
+  CHECK(m.anchored_edge == "uavloc_anchored.pt");
   // ... and the training config it ran with, every key resolved.
   REQUIRE(m.training.has_value());
   CHECK(TrainingConfigJson(*m.training).dump() ==
@@ -307,59 +323,119 @@ TEST_CASE("Trainer: writes a complete model folder and an honest report", "[pipe
     CHECK(files->encoder(mod).modality() == mod);
     CHECK(files->encoder(mod).latent_dim() == 8);
   }
-  CHECK(files->edge().latent_dim() == 8);
-  CHECK(files->edge().window_s() == kWindow);
+  for (const bool anchored : {false, true}) {
+    const auto edge = files->LoadEdge(anchored);
+    CHECK(edge->anchored() == anchored);
+    CHECK(edge->latent_dim() == 8);
+    CHECK(edge->window_s() == kWindow);
+  }
 }
 
-TEST_CASE("Trainer: the same seed trains byte-identical weights", "[pipeline][slow]") {
+TEST_CASE(
+    "Trainer: the same seed trains byte-identical weights, and a head alone is the head beside "
+    "the other",
+    "[pipeline][slow]") {
   const Trained& first = TrainedOnce();
+  // Again, the anchored head alone: the encoders and that head come out
+  // byte for byte as when both heads were trained.
   const std::string again = testing::TempDir("trainer-again") + "/model";
-  const TrainReport report = TrainInto(again);
-  for (const char* name : {"camera.pt", "lidar.pt", "radar.pt", "uavloc.pt", "camera.json",
-                           "lidar.json", "radar.json", "uavloc.pt.json", "model.json"}) {
+  TrainOptions o = Tiny();
+  o.paper_head = false;
+  InitTorch(1, kSeed);
+  const TrainReport report = TrainUavLoc(Synthetic(), o, SomeManifest(), again);
+  for (const char* name : {"camera.pt", "lidar.pt", "radar.pt", "uavloc_anchored.pt", "camera.json",
+                           "lidar.json", "radar.json", "uavloc_anchored.pt.json"}) {
     INFO(name);
     const std::string bytes = testing::ReadFile(first.dir + "/" + name);
     CHECK(bytes.size() > 100);
     CHECK(testing::ReadFile(again + "/" + name) == bytes);
   }
-  REQUIRE(report.stages.size() == first.report.stages.size());
-  for (std::size_t i = 0; i < report.stages.size(); ++i) {
-    INFO(report.stages[i].name);
-    CHECK(report.stages[i].epochs == first.report.stages[i].epochs);
-    CHECK(report.stages[i].best_epoch == first.report.stages[i].best_epoch);
-    CHECK(report.stages[i].best_validation_loss == first.report.stages[i].best_validation_loss);
+  CHECK_FALSE(fs::exists(again + "/uavloc.pt"));
+  const ModelManifest m = ReadModelManifest(again + "/model.json");
+  CHECK(m.edge.empty());
+  CHECK(m.anchored_edge == "uavloc_anchored.pt");
+  // Stages: the three encoders and the anchored fusion (the paper's skipped).
+  REQUIRE(report.stages.size() == 4);
+  for (std::size_t i = 0; i < 4; ++i) {
+    const StageReport& a = report.stages[i];
+    const StageReport& b = first.report.stages[i < 3 ? i : 4];
+    INFO(a.name);
+    CHECK(a.name == b.name);
+    CHECK(a.epochs == b.epochs);
+    CHECK(a.best_epoch == b.best_epoch);
+    CHECK(a.best_validation_loss == b.best_validation_loss);
   }
-  CHECK(report.test.rmse_m == first.report.test.rmse_m);
+  REQUIRE(report.test.count("uavloc_anchored") == 1);
+  CHECK(report.test.count("uavloc") == 0);
+  CHECK(report.test.at("uavloc_anchored").rmse_m == first.report.test.at("uavloc_anchored").rmse_m);
+}
+
+TEST_CASE("Trainer: the paper's head alone, end to end at toy size, cuts its validation loss 10x",
+          "[pipeline][slow]") {
+  // Issue 19: the paper's pipeline (IB-CC encoders, then TE-Align, MADW,
+  // MICA, Mamba and the linear head under a masked MSE) trained on the
+  // synthetic circles with enough stage-2 epochs to converge; nothing of
+  // the anchored head runs.
+  TrainOptions o = Tiny();
+  o.anchored_head = false;
+  o.stage2_max_epochs = 60;
+  o.stage2_patience = 15;
+  o.stage2_lr = 2e-3;
+  InitTorch(1, kSeed);
+  const std::string dir = testing::TempDir("trainer-paper") + "/model";
+  const TrainReport r = TrainUavLoc(Synthetic(), o, SomeManifest(), dir);
+  REQUIRE(r.stages.size() == 4);
+  const StageReport& fusion = r.stages[3];
+  CHECK(fusion.name == "fusion");
+  INFO("fusion: initial " << fusion.initial_validation_loss << ", best "
+                          << fusion.best_validation_loss << " at epoch " << fusion.best_epoch
+                          << " of " << fusion.epochs);
+  CHECK(fusion.best_validation_loss * 10.0 <= fusion.initial_validation_loss);
+  CHECK(r.candidate_offset_m.empty());  // no anchored head, no calibration
+  REQUIRE(r.test.count("uavloc") == 1);
+  CHECK(r.test.count("uavloc_anchored") == 0);
+  const ModelManifest m = ReadModelManifest(dir + "/model.json");
+  CHECK(m.edge == "uavloc.pt");
+  CHECK(m.anchored_edge.empty());
+  CHECK_FALSE(fs::exists(dir + "/uavloc_anchored.pt"));
+  CHECK_FALSE(UavLocModelFiles::Load(dir)->LoadEdge(false)->anchored());
 }
 
 TEST_CASE("Trainer: EvaluateModel scores the saved model on held-out episodes",
           "[pipeline][slow]") {
   const Trained& t = TrainedOnce();
   InitTorch(1, kSeed);
-  const Evaluation ev = EvaluateModel(t.dir, Synthetic().test);
-  for (const char* key : {"all", "camera", "lidar", "radar"}) {
-    INFO(key);
-    REQUIRE(ev.rmse_m.count(key) == 1);
-    REQUIRE(ev.windows.count(key) == 1);
-    CHECK(std::isfinite(ev.rmse_m.at(key)));
-    CHECK(ev.rmse_m.at(key) > 0.0);
-    CHECK(ev.windows.at(key) > 0);
-    CHECK(ev.windows.at(key) <= static_cast<std::size_t>(kWindows));
-    // The saved model is the one the trainer evaluated in memory.
-    REQUIRE(t.report.test.rmse_m.count(key) == 1);
-    CHECK(ev.rmse_m.at(key) == Approx(t.report.test.rmse_m.at(key)).epsilon(1e-9));
-    CHECK(ev.windows.at(key) == t.report.test.windows.at(key));
+  const auto evaluations = EvaluateModel(t.dir, Synthetic().test);
+  REQUIRE(evaluations.size() == 2);
+  for (const char* method : {"uavloc", "uavloc_anchored"}) {
+    const Evaluation& ev = evaluations.at(method);
+    const Evaluation& trained = t.report.test.at(method);
+    for (const char* key : {"all", "camera", "lidar", "radar"}) {
+      INFO(method << " " << key);
+      REQUIRE(ev.rmse_m.count(key) == 1);
+      REQUIRE(ev.windows.count(key) == 1);
+      CHECK(std::isfinite(ev.rmse_m.at(key)));
+      CHECK(ev.rmse_m.at(key) > 0.0);
+      CHECK(ev.windows.at(key) > 0);
+      CHECK(ev.windows.at(key) <= static_cast<std::size_t>(kWindows));
+      // The saved model is the one the trainer evaluated in memory.
+      REQUIRE(trained.rmse_m.count(key) == 1);
+      CHECK(ev.rmse_m.at(key) == Approx(trained.rmse_m.at(key)).epsilon(1e-9));
+      CHECK(ev.windows.at(key) == trained.windows.at(key));
+    }
+    // Every modality is seen in the first window.
+    CHECK(ev.windows.at("all") == static_cast<std::size_t>(kWindows));
   }
-  // Every modality is seen in the first window.
-  CHECK(ev.windows.at("all") == static_cast<std::size_t>(kWindows));
 
   // Through the manifest's path too; and an episode that saw nothing has no
   // scored window at all.
   Episode blind = Synthetic().test.front();
   blind.samples.clear();
-  const Evaluation none = EvaluateModel(ModelManifestPath(t.dir), {blind});
-  CHECK(none.windows.at("all") == 0);
-  CHECK(std::isnan(none.rmse_m.at("all")));
+  for (const auto& [method, none] : EvaluateModel(ModelManifestPath(t.dir), {blind})) {
+    INFO(method);
+    CHECK(none.windows.at("all") == 0);
+    CHECK(std::isnan(none.rmse_m.at("all")));
+  }
 }
 
 TEST_CASE("Trainer: refuses a data set without training or validation episodes", "[pipeline]") {
@@ -374,6 +450,12 @@ TEST_CASE("Trainer: refuses a data set without training or validation episodes",
                   std::invalid_argument);
   CHECK_FALSE(fs::exists(root + "/a"));
   CHECK_FALSE(fs::exists(root + "/b"));
+  // No edge head to train.
+  TrainOptions none = Tiny();
+  none.paper_head = none.anchored_head = false;
+  CHECK_THROWS_AS(TrainUavLoc(Synthetic(), none, SomeManifest(), root + "/c"),
+                  std::invalid_argument);
+  CHECK_FALSE(fs::exists(root + "/c"));
 }
 
 TEST_CASE("EdgeLocalizer: the trained model rides out windows with every modality missing",
@@ -381,33 +463,37 @@ TEST_CASE("EdgeLocalizer: the trained model rides out windows with every modalit
   const Trained& t = TrainedOnce();
   InitTorch(1, kSeed);
   const auto files = UavLocModelFiles::Load(t.dir);
-  EdgeLocalizer& edge = files->edge();
-  const Episode& ep = Synthetic().test.front();
-  WindowInputs empty;
-  for (std::int64_t k = 1; k <= 3; ++k) {
-    empty.window = k;
-    CHECK_FALSE(edge.OnWindow(empty).has_value());  // nothing seen yet
+  for (const bool anchored : {false, true}) {
+    INFO((anchored ? "anchored head" : "paper head"));
+    const auto head = files->LoadEdge(anchored);
+    EdgeLocalizer& edge = *head;
+    const Episode& ep = Synthetic().test.front();
+    WindowInputs empty;
+    for (std::int64_t k = 1; k <= 3; ++k) {
+      empty.window = k;
+      CHECK_FALSE(edge.OnWindow(empty).has_value());  // nothing seen yet
+    }
+    const WindowInputs seen = EncodedWindow(*files, ep, 4);
+    REQUIRE_FALSE(seen.frames[static_cast<int>(Modality::kLidar)].empty());
+    const auto first = edge.OnWindow(seen);
+    REQUIRE(first.has_value());
+    CHECK(first->allFinite());
+    for (std::int64_t k = 5; k < 35; ++k) {  // an exception fails the test too
+      empty.window = k;
+      INFO("window " << k);
+      const auto p = edge.OnWindow(empty);
+      REQUIRE(p.has_value());
+      CHECK(p->allFinite());
+    }
+    // The track resumes when data comes back.
+    const auto back = edge.OnWindow(EncodedWindow(*files, ep, 35));
+    REQUIRE(back.has_value());
+    CHECK(back->allFinite());
+    // And a reset forgets it.
+    edge.Reset();
+    empty.window = 36;
+    CHECK_FALSE(edge.OnWindow(empty).has_value());
   }
-  const WindowInputs seen = EncodedWindow(*files, ep, 4);
-  REQUIRE_FALSE(seen.frames[static_cast<int>(Modality::kLidar)].empty());
-  const auto first = edge.OnWindow(seen);
-  REQUIRE(first.has_value());
-  CHECK(first->allFinite());
-  for (std::int64_t k = 5; k < 35; ++k) {  // an exception fails the test too
-    empty.window = k;
-    INFO("window " << k);
-    const auto p = edge.OnWindow(empty);
-    REQUIRE(p.has_value());
-    CHECK(p->allFinite());
-  }
-  // The track resumes when data comes back.
-  const auto back = edge.OnWindow(EncodedWindow(*files, ep, 35));
-  REQUIRE(back.has_value());
-  CHECK(back->allFinite());
-  // And a reset forgets it.
-  edge.Reset();
-  empty.window = 36;
-  CHECK_FALSE(edge.OnWindow(empty).has_value());
 }
 
 TEST_CASE("EdgeLocalizer: untrained weights ride out windows with every modality missing",
@@ -449,6 +535,7 @@ TEST_CASE("Trainer: the MLP bottleneck baseline trains, saves and loads as such"
   const std::string dir = testing::TempDir("trainer-mlp") + "/model";
   TrainOptions o = Tiny();
   o.bottleneck = IbBottleneck::kMlp;
+  o.anchored_head = false;  // this is about the nodes: one head will do
   InitTorch(1, kSeed);
   const TrainReport report = TrainUavLoc(Synthetic(), o, SomeManifest(), dir);
   CHECK(report.stages.size() == 4);
@@ -496,6 +583,7 @@ TEST_CASE("Trainer: stage 1 leaves out observations of something other than the 
   TrainOptions o = Tiny();
   o.stage1_label_gate_m = 3.0;
   o.stage1_label_gate_deg = 3.0;
+  o.anchored_head = false;  // this is about stage 1: one head will do
   InitTorch(1, kSeed);
   const TrainReport r = TrainUavLoc(data, o, SomeManifest(), testing::TempDir("gate") + "/model");
   REQUIRE(r.stages.size() == 4);
