@@ -141,13 +141,14 @@ const char* kTrainHelp =
     "usage: uavsim train SCENARIO.json [--out MODEL] [--config TRAIN.json]\n"
     "                    [--config-set /ptr=value]... [--quick] [--seed N] [--episodes N]\n"
     "                    [--episode-s S] [--bottleneck ib|mlp] [--head H] [--threads N]\n"
-    "                    [--jobs N] [--data FILE] [--set /ptr=value]... [--force] [--quiet]\n"
+    "                    [--jobs N] [--data FILE] [--split trajectory|frame]\n"
+    "                    [--train-episodes N] [--set /ptr=value]... [--force] [--quiet]\n"
     "       mpirun -np K uavsim train SCENARIO.json ... (every rank simulates episodes)\n"
     "\n"
     "Generates training data by simulation and trains the UAVLoc model with LibTorch on\n"
     "the CPU. Each episode is the scenario with its own target trajectory (orbit,\n"
     "figure-eight or random flight around the scenario's flight region), seed, weather\n"
-    "and uplink loss; episodes are split 70/15/15 by trajectory. Stage 1 trains each\n"
+    "and uplink loss; episodes are split 70/15/15 (--split). Stage 1 trains each\n"
     "modality's IB-CC encoder, stage 2 TE-Align, MADW, MICA and Mamba on the sequences of\n"
     "latents that arrived in time, with random modality dropout, once per edge head (the\n"
     "paper's for uavloc, ours for uavloc_anchored). Adam, early stopping on validation.\n"
@@ -165,8 +166,11 @@ const char* kTrainHelp =
     "                 stage1_label_gate_deg stage2_lr stage2_batch stage2_sequence_windows\n"
     "                 stage2_max_epochs stage2_patience stage2_plateau_epochs\n"
     "                 stage2_min_steps_per_epoch modality_dropout window_dropout d_model\n"
-    "                 layers selection_weight selection_radius_m filter_preference_m\n"
-    "                 offset_calibration_radius_m position_loss (mixture|mean)\n"
+    "                 layers mica_lambda_init camera_stereo_branches (shared|two)\n"
+    "                 camera_eye_pool_side camera_roi_geometry selection_weight\n"
+    "                 selection_radius_m filter_preference_m offset_calibration_radius_m\n"
+    "                 position_loss (mixture|mean); scenarios/training/paper.json is the\n"
+    "                 paper's preset (learning rate 1e-4, its camera encoder)\n"
     "  --config-set P=V  override the training config's value at JSON pointer P\n"
     "  --quick        a small model in under 3 minutes (17 dry episodes of 10 s; fewer\n"
     "                 epochs and a larger step as config defaults, which --config overrides)\n"
@@ -178,6 +182,12 @@ const char* kTrainHelp =
     "  --head H       the edge heads to train on the same encoders: both (default), paper\n"
     "                 (the paper's linear head: method uavloc) or anchored (ours: the Mamba\n"
     "                 output picks among the nodes' geometric anchors; uavloc_anchored)\n"
+    "  --split S      trajectory (default: each episode in one of training, validation,\n"
+    "                 test) or frame (the random frame split common in the literature:\n"
+    "                 every episode's windows drawn 70/15/15 into the three parts, each\n"
+    "                 scored in its part only; neighbouring windows share a flight)\n"
+    "  --train-episodes N  train on the first N episodes of the training part only;\n"
+    "                 validation and test stay whole (learning curves on one test set)\n"
     "  --threads N    LibTorch threads (default 1); results depend on it\n"
     "  --jobs N       episodes simulated at a time, each in its own process with cores / N\n"
     "                 threads (default 1; per rank under mpirun, where rank 0 hands out\n"
@@ -412,9 +422,10 @@ const std::map<std::string, std::string>& ReplacedTrainFlags() {
 }
 
 int Train(int argc, char** argv) {
-  std::set<std::string> value_options{"--out",        "--seed", "--episodes", "--episode-s",
-                                      "--threads",    "--jobs", "--set",      "--data",
-                                      "--bottleneck", "--head", "--config",   "--config-set"};
+  std::set<std::string> value_options{
+      "--out",    "--seed",       "--episodes", "--episode-s",     "--threads",
+      "--jobs",   "--set",        "--data",     "--bottleneck",    "--head",
+      "--config", "--config-set", "--split",    "--train-episodes"};
   const auto refuse_replaced = [](const std::string& flag) {
     const auto it = ReplacedTrainFlags().find(flag);
     if (it == ReplacedTrainFlags().end()) return;
@@ -460,6 +471,14 @@ int Train(int argc, char** argv) {
     c.paper_head = *v != "anchored";
     c.anchored_head = *v != "paper";
   }
+  if (auto v = a.Value("--split")) {
+    if (*v != "trajectory" && *v != "frame")
+      throw UsageError("uavsim train: --split expects trajectory or frame, got '" + *v + "'");
+    c.split = *v == "frame" ? uavsim::pipeline::DataSplit::kFrame
+                            : uavsim::pipeline::DataSplit::kTrajectory;
+  }
+  if (auto v = a.Value("--train-episodes"))
+    c.train_episodes = static_cast<int>(UnsignedOption("train", "--train-episodes", *v, 100000));
   if ((a.Value("--episodes") && c.episodes < 3) || (a.Value("--threads") && c.threads < 1) ||
       c.jobs < 1)
     throw UsageError(

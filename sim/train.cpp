@@ -254,6 +254,39 @@ pipeline::Dataset SplitByTrajectory(std::vector<pipeline::Episode> episodes, std
   return d;
 }
 
+pipeline::Dataset SplitByFrame(std::vector<pipeline::Episode> episodes, std::uint64_t seed) {
+  core::RngStream rng(seed, "train/split-frame");
+  pipeline::Dataset d;
+  d.split = pipeline::DataSplit::kFrame;
+  std::size_t counts[3] = {0, 0, 0};  // training, validation, test windows
+  for (pipeline::Episode& e : episodes) {
+    std::vector<std::uint8_t> part(e.window_truth.size());
+    for (std::uint8_t& p : part) {
+      const double u = rng.Uniform();
+      p = u < 0.15 ? 2 : u < 0.30 ? 1 : 0;
+      ++counts[p];
+    }
+    pipeline::Episode* copies[3];
+    d.train.push_back(e);
+    d.validation.push_back(e);
+    d.test.push_back(std::move(e));
+    copies[0] = &d.train.back();
+    copies[1] = &d.validation.back();
+    copies[2] = &d.test.back();
+    for (std::uint8_t j = 0; j < 3; ++j) {
+      copies[j]->scored_windows.resize(part.size());
+      for (std::size_t k = 0; k < part.size(); ++k)
+        copies[j]->scored_windows[k] = part[k] == j ? 1 : 0;
+    }
+  }
+  if (counts[0] == 0 || counts[1] == 0)
+    throw std::invalid_argument("train: the frame split left no " +
+                                std::string(counts[0] == 0 ? "training" : "validation") +
+                                " window (" + std::to_string(counts[0] + counts[1] + counts[2]) +
+                                " windows in all)");
+  return d;
+}
+
 TrainDefaults Defaults(bool quick) {
   TrainDefaults d;
   if (!quick) return d;
@@ -350,16 +383,30 @@ std::optional<pipeline::TrainReport> RunTraining(const Scenario& base, const Tra
     episodes = SimulateEpisodes(base, plan, jobs);
     if (!c.data_file.empty()) pipeline::WriteEpisodes(episodes, c.data_file);
   }
-  pipeline::Dataset data = SplitByTrajectory(std::move(episodes), c.seed);
+  pipeline::Dataset data = c.split == pipeline::DataSplit::kFrame
+                               ? SplitByFrame(std::move(episodes), c.seed)
+                               : SplitByTrajectory(std::move(episodes), c.seed);
+  if (c.train_episodes > 0 && static_cast<std::size_t>(c.train_episodes) < data.train.size())
+    data.train.resize(static_cast<std::size_t>(c.train_episodes));
+  std::string split = std::to_string(data.train.size()) + "/" +
+                      std::to_string(data.validation.size()) + "/" +
+                      std::to_string(data.test.size()) + " by trajectory";
+  if (data.split == pipeline::DataSplit::kFrame) {
+    std::size_t windows[3] = {0, 0, 0};
+    const std::vector<pipeline::Episode>* parts[3] = {&data.train, &data.validation, &data.test};
+    for (int j = 0; j < 3; ++j)
+      for (const pipeline::Episode& e : *parts[j])
+        for (std::uint8_t scored : e.scored_windows) windows[j] += scored;
+    split = std::to_string(windows[0]) + "/" + std::to_string(windows[1]) + "/" +
+            std::to_string(windows[2]) + " windows by frame";
+  }
 
   pipeline::ModelManifest manifest;
   manifest.scenario = base.name;
   manifest.layout_hash = LayoutHash(base);
   manifest.note = "trained by `" + c.command_line + "` (seed " + std::to_string(c.seed) + ", " +
                   std::to_string(plan.episodes) + " episodes of " +
-                  core::FormatNumber(plan.episode_s) + " s, split " +
-                  std::to_string(data.train.size()) + "/" + std::to_string(data.validation.size()) +
-                  "/" + std::to_string(data.test.size()) + " by trajectory)";
+                  core::FormatNumber(plan.episode_s) + " s, split " + split + ")";
   pipeline::InitTorch(c.threads, c.seed);  // reseed: the weights do not depend on the simulation
   const pipeline::TrainReport report =
       pipeline::TrainUavLoc(data, t, manifest, dir->StagingPath("."));

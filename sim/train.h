@@ -2,8 +2,8 @@
 // UAVLoc (pipeline/training/trainer.h). Each episode is the scenario with its own
 // target trajectory (orbits, figure-eights and random flights around the
 // scenario's own flight region), seed, weather (rain, fog) and uplink loss;
-// episodes are split 70/15/15 by trajectory into training, validation and
-// held-out test sets.
+// episodes are split 70/15/15 by trajectory (by default) or by frame into
+// training, validation and held-out test sets.
 #pragma once
 
 #include <cstdint>
@@ -62,6 +62,13 @@ std::vector<pipeline::Episode> SimulateEpisodes(const Scenario& base, const Epis
 // there are three or more episodes), the rest training; which episode goes
 // where is a seeded shuffle.
 pipeline::Dataset SplitByTrajectory(std::vector<pipeline::Episode> episodes, std::uint64_t seed);
+// Splits by frame (pipeline::DataSplit::kFrame): each episode goes into every
+// part, each of its windows drawn into one part (test with probability 0.15,
+// validation 0.15, else training; a seeded draw per window) and scored
+// there only. The parts' episodes share the samples by copy (three times the
+// memory of the episodes). Throws std::invalid_argument when the draw leaves
+// the training or validation part without a window.
+pipeline::Dataset SplitByFrame(std::vector<pipeline::Episode> episodes, std::uint64_t seed);
 
 // What --quick changes, in one place: the defaults of the episode plan and of
 // the training config, which a config file then overrides. quick = false: the
@@ -86,11 +93,15 @@ struct TrainCommand {
   bool quick = false;  // Defaults(true).plan (and `training` resolved with quick)
   bool quiet = false;
   std::uint64_t seed = 1;
-  int episodes = 0;                   // 0: the plan's default
-  double episode_s = 0.0;             // 0: the plan's default
-  bool mlp_bottleneck = false;        // the paper's MLP baseline instead of the IB head
-  bool paper_head = true;             // train the paper's linear edge head (uavloc)
-  bool anchored_head = true;          // train our anchored edge head (uavloc_anchored)
+  int episodes = 0;             // 0: the plan's default
+  double episode_s = 0.0;       // 0: the plan's default
+  bool mlp_bottleneck = false;  // the paper's MLP baseline instead of the IB head
+  bool paper_head = true;       // train the paper's linear edge head (uavloc)
+  bool anchored_head = true;    // train our anchored edge head (uavloc_anchored)
+  pipeline::DataSplit split = pipeline::DataSplit::kTrajectory;
+  // Train on the first N episodes of the training part only (0: all); the
+  // validation and test parts stay whole (learning curves on one test set).
+  int train_episodes = 0;
   pipeline::TrainingConfig training;  // as ResolveTrainingConfig gives it
   int threads = 1;                    // LibTorch intra-op threads (see NOTES.md: 1 is fastest here)
   int jobs = 1;                       // episodes simulated at a time (per rank under mpirun)

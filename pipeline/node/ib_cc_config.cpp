@@ -21,6 +21,12 @@ void Visit(V& v, IbCcConfig& c) {
   v("dropout", c.dropout, Rule{0.0, 1.0, false, true});
   v("beta", c.beta, Rule::NonNegative());
   v.Object("normalization", c.normalization);
+  v.Enum("stereo_branches", c.stereo_branches,
+         {{"shared", StereoBranches::kShared}, {"two", StereoBranches::kTwo}});
+  v("eye_pool_side", c.eye_pool_side, Rule::Range(0, 32));
+  v.Check(c.eye_pool_side == 0 || 32 % c.eye_pool_side == 0, "eye_pool_side",
+          "expected 0 (no pooling) or a divisor of 32, got " + std::to_string(c.eye_pool_side));
+  v("roi_geometry", c.roi_geometry);
 }
 UAVSIM_INSTANTIATE_VISIT(IbCcConfig);
 

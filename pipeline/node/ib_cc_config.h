@@ -15,6 +15,12 @@ enum class IbBottleneck {
   kMlp,  // deterministic MLP of the same depth and parameter count, no KL (Sec. VI baseline)
 };
 
+// How the camera's feature encoder treats the two stereo eyes (Table I).
+enum class StereoBranches {
+  kShared,  // one CNN runs on both eyes (ours: half the weights)
+  kTwo,     // two parallel CNN branches, one per eye (the paper, Sec. IV-B)
+};
+
 struct IbCcConfig {
   Modality modality = Modality::kCamera;  // camera: image encoder; lidar/radar: PointNet
   int latent_dim = 16;                    // paper: z in {4, 8, 16, 32, 64}
@@ -22,6 +28,18 @@ struct IbCcConfig {
   double dropout = 0.1;  // paper Sec. VI
   double beta = 1e-3;    // paper Sec. VI: IB trade-off in L = MSE + beta KL
   IbNormalization normalization;
+  // Camera only; the defaults are the layout of models trained before these
+  // switches existed (a sidecar without the keys loads as before). The
+  // paper's design: kTwo, 0, false (scenarios/training/paper.json).
+  StereoBranches stereo_branches = StereoBranches::kShared;
+  // Side of the average pool of each eye's 64x32x32 map before the bottleneck
+  // (a divisor of 32): 4 keeps 64x4x4 = 1 024 features an eye (ours); 0 pools
+  // nothing, 65 536 features an eye (the paper's Table III count).
+  int eye_pool_side = 4;
+  // Append the crop's 18 ROI-geometry features (where it lies in the image,
+  // ib_normalization.h) to h^c (ours); the paper's 128x128 crop alone carries
+  // no bearing.
+  bool roi_geometry = true;
 };
 
 template <class V>

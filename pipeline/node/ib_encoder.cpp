@@ -128,21 +128,46 @@ torch::Tensor MakePositionTarget(const std::vector<Eigen::Vector3d>& positions_w
   return y;
 }
 
-ImageFeatureEncoderImpl::ImageFeatureEncoderImpl(double dropout) {
+ImageFeatureEncoderImpl::ImageFeatureEncoderImpl(double dropout, StereoBranches branches,
+                                                 int eye_pool_side, bool roi_geometry)
+    : branches_(branches), eye_pool_side_(eye_pool_side), roi_geometry_(roi_geometry) {
+  if (eye_pool_side < 0 || (eye_pool_side > 0 && 32 % eye_pool_side != 0))
+    throw std::invalid_argument(
+        "ImageFeatureEncoder: eye_pool_side must be 0 or a divisor of 32, got " +
+        std::to_string(eye_pool_side));
   using torch::nn::Conv2dOptions;
-  conv1_ =
-      register_module("conv1", torch::nn::Conv2d(Conv2dOptions(1, 32, 3).stride(2).padding(1)));
-  conv2_ =
-      register_module("conv2", torch::nn::Conv2d(Conv2dOptions(32, 64, 3).stride(2).padding(1)));
-  pool_ = register_module(
-      "pool", torch::nn::AdaptiveAvgPool2d(torch::nn::AdaptiveAvgPool2dOptions(kPooledSide)));
+  const auto conv = [](std::int64_t in, std::int64_t out) {
+    return torch::nn::Conv2d(Conv2dOptions(in, out, 3).stride(2).padding(1));
+  };
+  conv1_ = register_module("conv1", conv(1, 32));
+  conv2_ = register_module("conv2", conv(32, 64));
+  if (branches_ == StereoBranches::kTwo) {
+    conv1_right_ = register_module("conv1_right", conv(1, 32));
+    conv2_right_ = register_module("conv2_right", conv(32, 64));
+  }
+  if (eye_pool_side_ > 0)
+    pool_ = register_module(
+        "pool", torch::nn::AdaptiveAvgPool2d(torch::nn::AdaptiveAvgPool2dOptions(eye_pool_side_)));
   dropout_ = register_module("dropout", torch::nn::Dropout(dropout));
 }
 
-std::vector<torch::Tensor> ImageFeatureEncoderImpl::FeatureMaps(const torch::Tensor& eyes) {
+std::int64_t ImageFeatureEncoderImpl::eye_features() const {
+  const std::int64_t side = eye_pool_side_ > 0 ? eye_pool_side_ : 32;
+  return 64 * side * side;
+}
+
+std::int64_t ImageFeatureEncoderImpl::features() const {
+  return 2 * eye_features() + (roi_geometry_ ? kCameraGeometryFeatures : 0);
+}
+
+std::vector<torch::Tensor> ImageFeatureEncoderImpl::FeatureMaps(const torch::Tensor& eyes,
+                                                                bool right) {
+  const bool own = right && branches_ == StereoBranches::kTwo;
+  torch::nn::Conv2d& c1 = own ? conv1_right_ : conv1_;
+  torch::nn::Conv2d& c2 = own ? conv2_right_ : conv2_;
   // Table I: ReLU(Conv 1->32) -> ReLU(Conv 32->64), 3x3, stride 2, padding 1.
-  torch::Tensor h1 = torch::relu(conv1_->forward(eyes));
-  torch::Tensor h2 = torch::relu(conv2_->forward(h1));
+  torch::Tensor h1 = torch::relu(c1->forward(eyes));
+  torch::Tensor h2 = torch::relu(c2->forward(h1));
   return {h1, h2};
 }
 
@@ -157,16 +182,26 @@ torch::Tensor ImageFeatureEncoderImpl::forward(const torch::Tensor& left,
     Fail("ImageFeatureEncoder: right", "[B, 1, 128, 128] with B = " + std::to_string(b), right);
   if (!HasShape(geometry, {b, kCameraGeometryFeatures}))
     Fail("ImageFeatureEncoder: geometry", "[B, 18] with B = " + std::to_string(b), geometry);
-  // Shared weights: one pass over both eyes as a batch of 2B.
-  torch::Tensor maps = FeatureMaps(torch::cat({left, right}, 0)).back();
-  // Flattened, 2 x 64x32x32 = 131072 features would give each of the mu and
-  // sigma MLPs 16.8 M first-layer weights; a 4x4 average pool keeps the
-  // coarse layout of each eye in 1024.
-  torch::Tensor pooled = pool_->forward(maps).flatten(1);
-  std::vector<torch::Tensor> eyes = pooled.chunk(2, 0);
+  // Flattened, 2 x 64x32x32 = 131072 features give each of the mu and sigma
+  // MLPs 16.8 M first-layer weights (the paper's layout); a 4x4 average pool
+  // keeps the coarse layout of each eye in 1024.
+  const auto flat = [&](const torch::Tensor& maps) {
+    return (pool_ ? pool_->forward(maps) : maps).flatten(1);
+  };
+  torch::Tensor h_left, h_right;
+  if (branches_ == StereoBranches::kShared) {
+    // Shared weights: one pass over both eyes as a batch of 2B.
+    std::vector<torch::Tensor> eyes =
+        flat(FeatureMaps(torch::cat({left, right}, 0)).back()).chunk(2, 0);
+    h_left = eyes[0];
+    h_right = eyes[1];
+  } else {
+    h_left = flat(FeatureMaps(left).back());
+    h_right = flat(FeatureMaps(right, true).back());
+  }
   // h^c = Dropout(Concat(h^left, h^right)) (paper eq. for h^c).
-  torch::Tensor h_c = dropout_->forward(torch::cat({eyes[0], eyes[1]}, 1));
-  return torch::cat({h_c, geometry}, 1);
+  torch::Tensor h_c = dropout_->forward(torch::cat({h_left, h_right}, 1));
+  return roi_geometry_ ? torch::cat({h_c, geometry}, 1) : h_c;
 }
 
 PointNetEncoderImpl::PointNetEncoderImpl(std::int64_t in_channels) : in_channels_(in_channels) {
@@ -314,8 +349,10 @@ IbCcModelImpl::IbCcModelImpl(const IbCcConfig& config) : config_(config) {
     throw std::invalid_argument("IbCcModel: dropout must be in [0, 1), got " +
                                 std::to_string(config.dropout));
   if (config.modality == Modality::kCamera) {
-    image_encoder_ = register_module("image_encoder", ImageFeatureEncoder(config.dropout));
-    feature_dim_ = ImageFeatureEncoderImpl::kFeatures;
+    image_encoder_ = register_module(
+        "image_encoder", ImageFeatureEncoder(config.dropout, config.stereo_branches,
+                                             config.eye_pool_side, config.roi_geometry));
+    feature_dim_ = image_encoder_->features();
   } else {
     point_encoder_ =
         register_module("point_encoder", PointNetEncoder(PointChannels(config.modality)));

@@ -2,7 +2,7 @@
 // (paper Sec. IV-B, Table I), in LibTorch. Per modality:
 //
 //   feature encoder  camera: ImageFeatureEncoder (both stereo eyes, dropout,
-//                    plus ROI geometry); LiDAR/radar: PointNetEncoder
+//                    optionally ROI geometry); LiDAR/radar: PointNetEncoder
 //   bottleneck       IbHead (mu, sigma MLPs; t = mu + sigma * eps) or the
 //                    MlpCompressor baseline (deterministic, no KL)
 //   decoder          IbDecoder -> 3-D position (training only)
@@ -48,29 +48,41 @@ IbInput MakePointInput(const std::vector<const PointObservation*>& obs, Modality
 torch::Tensor MakePositionTarget(const std::vector<Eigen::Vector3d>& positions_w,
                                  const IbNormalization& n);
 
-// Table I, image feature encoder, applied to each stereo eye with SHARED
-// weights (one CNN run on both eyes as one batch):
+// Table I, image feature encoder, per stereo eye:
 //   ReLU(Conv 3x3 s2 p1, 1 -> 32) -> ReLU(Conv 3x3 s2 p1, 32 -> 64)
-//   128x128 -> 32x64x64 -> 64x32x32 -> adaptive average pool to 64x4x4 ->
-//   flatten: h^left, h^right in R^1024 each.
-// h^c = Dropout(Concat(h^left, h^right)) (paper eq. for h^c), then the ROI
-// geometry is appended: output [B, kFeatures] = [B, 2048 + 18].
+//   128x128 -> 32x64x64 -> 64x32x32 -> [average pool to 64xSxS] -> flatten:
+//   h^left, h^right in R^(64 S^2) each (S = eye_pool_side; 32 without a pool).
+// h^c = Dropout(Concat(h^left, h^right)) (paper eq. for h^c), then, with
+// roi_geometry, the ROI geometry is appended: output [B, features()].
+// The eyes run through two parallel branches (StereoBranches::kTwo, the
+// paper; modules conv1, conv2 for the left eye and conv1_right, conv2_right)
+// or one CNN with shared weights (kShared, ours: one pass over both eyes).
+// The switches are IbCcConfig's; the defaults are the layout older models
+// were saved with.
 class ImageFeatureEncoderImpl : public torch::nn::Module {
  public:
-  static constexpr std::int64_t kPooledSide = 4;
-  static constexpr std::int64_t kEyeFeatures = 64 * kPooledSide * kPooledSide;
-  static constexpr std::int64_t kFeatures = 2 * kEyeFeatures + kCameraGeometryFeatures;
+  ImageFeatureEncoderImpl(double dropout = 0.1, StereoBranches branches = StereoBranches::kShared,
+                          int eye_pool_side = 4, bool roi_geometry = true);
 
-  explicit ImageFeatureEncoderImpl(double dropout = 0.1);
+  // Features of one eye and of the whole output (2 eyes + the geometry).
+  std::int64_t eye_features() const;
+  std::int64_t features() const;
 
-  // Both conv stages for eyes [B, 1, 128, 128]: {[B, 32, 64, 64], [B, 64, 32, 32]}.
-  std::vector<torch::Tensor> FeatureMaps(const torch::Tensor& eyes);
+  // Both conv stages of one branch (`right`: the right eye's; the same as the
+  // left's with shared weights) for eyes [B, 1, 128, 128]:
+  // {[B, 32, 64, 64], [B, 64, 32, 32]}.
+  std::vector<torch::Tensor> FeatureMaps(const torch::Tensor& eyes, bool right = false);
+  // geometry [B, 18] is required in every layout (ignored without roi_geometry).
   torch::Tensor forward(const torch::Tensor& left, const torch::Tensor& right,
                         const torch::Tensor& geometry);
 
  private:
+  StereoBranches branches_;
+  int eye_pool_side_;
+  bool roi_geometry_;
   torch::nn::Conv2d conv1_{nullptr}, conv2_{nullptr};
-  torch::nn::AdaptiveAvgPool2d pool_{nullptr};
+  torch::nn::Conv2d conv1_right_{nullptr}, conv2_right_{nullptr};  // kTwo only
+  torch::nn::AdaptiveAvgPool2d pool_{nullptr};                     // eye_pool_side > 0 only
   torch::nn::Dropout dropout_{nullptr};
 };
 TORCH_MODULE(ImageFeatureEncoder);

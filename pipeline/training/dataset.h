@@ -32,13 +32,38 @@ struct Episode {
   double window_s = 0.2;
   std::vector<Sample> samples;                // in capture order
   std::vector<Eigen::Vector3d> window_truth;  // [k - 1]: target position at k t^w
+  // The windows whose truth the part of a Dataset holding this copy may use:
+  // empty, every window (a split by trajectory); else [k - 1] is 1 for the
+  // windows of this part (a split by frame). Stage 1 learns from the samples
+  // captured in such windows only; stage 2's losses, its validation and the
+  // held-out scores count such windows only. Not stored by dataset_io.
+  std::vector<std::uint8_t> scored_windows;
+  // Whether window k (1-based) is scored, as above.
+  bool Scored(std::int64_t k) const {
+    if (scored_windows.empty()) return true;
+    return k >= 1 && k <= static_cast<std::int64_t>(scored_windows.size()) &&
+           scored_windows[static_cast<std::size_t>(k - 1)] != 0;
+  }
 };
 
-// Episodes split by trajectory (each episode is its own trajectory), never by
-// frame: 70 / 15 / 15 % with at least one episode in each part when there are
-// three or more.
+// How a Dataset was split into training, validation and test parts.
+enum class DataSplit {
+  // By trajectory (the default): each episode is its own trajectory and lies
+  // in one part only, 70 / 15 / 15 % with at least one episode in each part
+  // when there are three or more. Held-out scores are on unseen flights.
+  kTrajectory,
+  // By frame (the random frame split common in the literature): every
+  // episode lies in every part, each of its windows drawn into one part
+  // (70 / 15 / 15 %) and scored there only (Episode::scored_windows). A
+  // test window's neighbours, 0.2 s away, were training labels; its inputs
+  // were seen in training, unlabelled.
+  kFrame,
+};
+const char* DataSplitName(DataSplit s);  // "trajectory", "frame"
+
 struct Dataset {
   std::vector<Episode> train, validation, test;
+  DataSplit split = DataSplit::kTrajectory;
 };
 
 }  // namespace uavsim::pipeline

@@ -165,6 +165,8 @@ void WriteEpisodes(const std::vector<Episode>& episodes, const std::string& path
   if (ec) throw std::runtime_error(path + ": cannot write: " + ec.message());
 }
 
+const char* DataSplitName(DataSplit s) { return s == DataSplit::kFrame ? "frame" : "trajectory"; }
+
 std::vector<Episode> ReadEpisodes(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::runtime_error(path + ": cannot open");

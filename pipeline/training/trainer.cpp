@@ -103,11 +103,15 @@ void RunEpochs(torch::nn::Module& model, int max_epochs, int patience, const std
 
 // ---- Stage 1: one modality's IB-CC model on its observations ----
 
-std::vector<const Sample*> SamplesOf(const std::vector<Episode>& episodes, Modality m) {
+// The samples of modality m captured in the episodes' scored windows
+// (Episode::scored_windows; `align` places them).
+std::vector<const Sample*> SamplesOf(const std::vector<Episode>& episodes, Modality m,
+                                     const TeAlign& align) {
   std::vector<const Sample*> out;
   for (const Episode& e : episodes)
     for (const Sample& s : e.samples)
-      if (s.modality == m) out.push_back(&s);
+      if (s.modality == m && (e.scored_windows.empty() || e.Scored(align.WindowOf(s.t_s))))
+        out.push_back(&s);
   return out;
 }
 
@@ -134,7 +138,10 @@ bool ShowsTarget(const Sample& s, const TrainOptions& o) {
 std::vector<const Sample*> TargetSamplesOf(const std::vector<Episode>& episodes, Modality m,
                                            const TrainOptions& o, std::size_t* dropped) {
   std::vector<const Sample*> out;
-  for (const Sample* s : SamplesOf(episodes, m))
+  TeAlignConfig windows;
+  windows.latent_dim = o.latent_dim;
+  windows.window_s = o.window_s;
+  for (const Sample* s : SamplesOf(episodes, m, TeAlign(windows)))
     ShowsTarget(*s, o) ? out.push_back(s) : void(++*dropped);
   return out;
 }
@@ -193,6 +200,9 @@ IbCcModel TrainEncoder(Modality m, const Dataset& data, const TrainOptions& o,
   config.beta = o.beta;
   config.bottleneck = o.bottleneck;
   config.normalization = norm;
+  config.stereo_branches = o.camera_stereo_branches;
+  config.eye_pool_side = o.camera_eye_pool_side;
+  config.roi_geometry = o.camera_roi_geometry;
   IbCcModel model(config);
   std::size_t dropped = 0;
   std::vector<const Sample*> train = TargetSamplesOf(data.train, m, o, &dropped);
@@ -260,6 +270,7 @@ struct WindowSequence {
   torch::Tensor latents;  // [K, M, z]
   torch::Tensor mask;     // [K, M]
   torch::Tensor truth;    // [K, 3]
+  torch::Tensor scored;   // [K]: 1 for the windows whose truth this part uses
   // Per window, each modality's anchors (pipeline/anchored/anchors.h).
   std::vector<WindowAnchors> anchors;
 };
@@ -320,6 +331,9 @@ WindowSequence AlignEpisode(const Episode& ep, const std::vector<std::vector<flo
   seq.mask = b.mask[0];
   std::vector<Eigen::Vector3d> truth(ep.window_truth.begin(), ep.window_truth.end());
   seq.truth = MakePositionTarget(truth, norm);
+  seq.scored = torch::ones({k_count});
+  for (std::int64_t k = 1; k <= k_count; ++k)
+    if (!ep.Scored(k)) seq.scored[k - 1] = 0.0;
   return seq;
 }
 
@@ -329,10 +343,15 @@ torch::Tensor EstimatedWindows(const torch::Tensor& mask) {
   return (std::get<0>(mask.amax(2).cummax(1)) > 0.5).to(torch::kFloat32);
 }
 
-// Mean squared error (summed over x, y, z) over the estimated windows.
+// The windows a loss or a score counts, [B, K]: estimated (mask [B, K, M])
+// and scored in this part (scored [B, K]).
+torch::Tensor CountedWindows(const torch::Tensor& mask, const torch::Tensor& scored) {
+  return EstimatedWindows(mask) * scored;
+}
+
+// Mean squared error (summed over x, y, z) over the counted windows w [B, K].
 torch::Tensor MaskedMse(const torch::Tensor& y_hat, const torch::Tensor& y,
-                        const torch::Tensor& mask) {
-  const torch::Tensor w = EstimatedWindows(mask);
+                        const torch::Tensor& w) {
   return ((y_hat - y).square().sum(2) * w).sum() / w.sum().clamp_min(1.0);
 }
 
@@ -372,11 +391,14 @@ std::vector<Eigen::Vector3d> CandidateOffsets(const std::vector<WindowSequence>&
   std::vector<Eigen::Vector3d> truth;
   for (const WindowSequence& s : train) {
     const std::vector<AnchorWindow> a = TrackAnchors(s, 0, s.mask, c);
-    windows.insert(windows.end(), a.begin(), a.end());
     const torch::Tensor y = s.truth.to(torch::kFloat64).contiguous();
     const auto acc = y.accessor<double, 2>();
-    for (std::int64_t k = 0; k < y.size(0); ++k)
+    const auto scored = s.scored.accessor<float, 1>();
+    for (std::int64_t k = 0; k < y.size(0); ++k) {
+      if (scored[k] < 0.5f) continue;  // another part's label
+      windows.push_back(a[static_cast<std::size_t>(k)]);
       truth.emplace_back(acc[k][0], acc[k][1], acc[k][2]);
+    }
   }
   const auto offsets = MedianCandidateOffsets(windows, truth, c.position_scale_m, radius_m,
                                               TrainOptions::kMinOffsetWindows);
@@ -387,9 +409,9 @@ std::vector<Eigen::Vector3d> CandidateOffsets(const std::vector<WindowSequence>&
 // hypotheses h [B, K, H, 3] against the valid candidate nearest the truth
 // [B, K, 3] (the filter's track preferred by `preference`, normalised) if
 // within `radius` (normalised), else the nearer of the two free hypotheses;
-// mean over the estimated windows.
+// mean over the counted windows w [B, K].
 torch::Tensor SelectionLoss(const torch::Tensor& log_w, const torch::Tensor& h,
-                            const torch::Tensor& truth, const torch::Tensor& mask, double radius,
+                            const torch::Tensor& truth, const torch::Tensor& w, double radius,
                             double preference) {
   const torch::Tensor d =
       (h.detach() - truth.unsqueeze(-2))
@@ -400,16 +422,14 @@ torch::Tensor SelectionLoss(const torch::Tensor& log_w, const torch::Tensor& h,
   const auto [nearest, index] = (d.narrow(-1, 0, kAnchorCandidates) - bonus).min(-1);
   const torch::Tensor free = d.narrow(-1, kAnchorCandidates, 2).argmin(-1) + kAnchorCandidates;
   const torch::Tensor target = torch::where(nearest < radius, index, free);
-  const torch::Tensor w = EstimatedWindows(mask);
   return -(log_w.gather(-1, target.unsqueeze(-1)).squeeze(-1) * w).sum() / w.sum().clamp_min(1.0);
 }
 
 // The expected squared error of the anchored head's hypotheses h [B, K, H,
 // 3] under their weights exp(log_w) [B, K, H] against the truth [B, K, 3],
-// over the estimated windows.
+// over the counted windows w [B, K].
 torch::Tensor MixtureMse(const torch::Tensor& log_w, const torch::Tensor& h,
-                         const torch::Tensor& truth, const torch::Tensor& mask) {
-  const torch::Tensor w = EstimatedWindows(mask);
+                         const torch::Tensor& truth, const torch::Tensor& w) {
   const torch::Tensor expected = (log_w.exp() * (h - truth.unsqueeze(-2)).square().sum(-1)).sum(-1);
   return (expected * w).sum() / w.sum().clamp_min(1.0);
 }
@@ -421,7 +441,7 @@ double FusionValidationLoss(UavLocModel& model, const std::vector<WindowSequence
   for (const WindowSequence& s : val) {
     const torch::Tensor mask = s.mask.unsqueeze(0);
     const torch::Tensor y_hat = ForwardSequence(model, s, s.mask);
-    const torch::Tensor w = EstimatedWindows(mask);
+    const torch::Tensor w = CountedWindows(mask, s.scored.unsqueeze(0));
     sum += ((y_hat - s.truth.unsqueeze(0)).square().sum(2) * w).sum().item<double>();
     count += w.sum().item<double>();
   }
@@ -435,10 +455,11 @@ struct CropBatch {
   FusionBatch fusion;
   AnchorBatch anchors;
   torch::Tensor truth;
+  torch::Tensor scored;  // [B, K]
 };
 CropBatch DrawCrops(const std::vector<WindowSequence>& train, int batch, std::int64_t k,
                     const TrainOptions& o, const UavLocModelConfig& config) {
-  std::vector<torch::Tensor> lat, mask, y;
+  std::vector<torch::Tensor> lat, mask, y, scored;
   std::vector<std::vector<AnchorWindow>> anchors;
   const torch::Tensor pick =
       torch::randint(static_cast<std::int64_t>(train.size()), {batch}, torch::kLong);
@@ -457,10 +478,12 @@ CropBatch DrawCrops(const std::vector<WindowSequence>& train, int batch, std::in
     if (config.anchored) anchors.push_back(TrackAnchors(s, start, m, config));
     mask.push_back(m);
     y.push_back(s.truth.narrow(0, start, k));
+    scored.push_back(s.scored.narrow(0, start, k));
   }
   return {{torch::stack(lat), torch::stack(mask)},
           config.anchored ? StackAnchors(anchors) : AnchorBatch{},
-          torch::stack(y)};
+          torch::stack(y),
+          torch::stack(scored)};
 }
 
 UavLocModel TrainFusion(const std::vector<WindowSequence>& train,
@@ -495,12 +518,13 @@ UavLocModel TrainFusion(const std::vector<WindowSequence>& train,
           const torch::Tensor y_hat =
               model->forward(b.fusion.latents, b.fusion.mask,
                              config.anchored ? &b.anchors : nullptr, &log_w, &hypotheses);
+          const torch::Tensor w = CountedWindows(b.fusion.mask, b.scored);
           torch::Tensor loss = config.anchored && o.mixture_loss
-                                   ? MixtureMse(log_w, hypotheses, b.truth, b.fusion.mask)
-                                   : MaskedMse(y_hat, b.truth, b.fusion.mask);
+                                   ? MixtureMse(log_w, hypotheses, b.truth, w)
+                                   : MaskedMse(y_hat, b.truth, w);
           if (config.anchored && o.selection_weight > 0.0)
             loss = loss + o.selection_weight *
-                              SelectionLoss(log_w, hypotheses, b.truth, b.fusion.mask,
+                              SelectionLoss(log_w, hypotheses, b.truth, w,
                                             o.selection_radius_m / config.position_scale_m,
                                             o.filter_preference_m / config.position_scale_m);
           loss.backward();
@@ -537,7 +561,7 @@ Evaluation Evaluate(UavLocModel& model, const std::vector<WindowSequence>& seque
       if (subset >= 0) keep.zero_(), keep[0][subset] = 1.0;
       const torch::Tensor mask = (s.mask * keep).unsqueeze(0);
       const torch::Tensor y_hat = ForwardSequence(model, s, mask[0]);
-      const torch::Tensor w = EstimatedWindows(mask);
+      const torch::Tensor w = CountedWindows(mask, s.scored.unsqueeze(0));
       sum += ((y_hat - s.truth.unsqueeze(0)).square().sum(2) * w).sum().item<double>();
       count += w.sum().item<double>();
     }
@@ -604,6 +628,7 @@ TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& o, const ModelM
   const fs::path checkpoints = out / "checkpoints";
   fs::create_directories(checkpoints);
   TrainReport report;
+  report.split = data.split;
   std::vector<IbCcModel> encoders;
   for (int m = 0; m < kModalityCount; ++m) {
     StageReport stage;
@@ -618,6 +643,7 @@ TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& o, const ModelM
   config.window_s = o.window_s;
   config.d_model = o.d_model;
   config.layers = o.layers;
+  config.lambda_init = o.mica_lambda_init;
   config.position_centre_m = norm.centre_m;
   config.position_scale_m = norm.scale_m;
   const TeAlign align(config.te_align());
@@ -695,6 +721,7 @@ std::map<std::string, Evaluation> EvaluateModel(const std::string& model_path,
 std::string ReportJson(const TrainReport& r, const TrainOptions& o) {
   core::Json j = core::Json::object();
   j["seed"] = o.seed;
+  j["split"] = DataSplitName(r.split);
   j["latent_dim"] = o.latent_dim;
   j["bottleneck"] = o.bottleneck == IbBottleneck::kIb ? "ib" : "mlp";
   core::Json heads = core::Json::array();

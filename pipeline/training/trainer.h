@@ -67,14 +67,15 @@ struct StageReport {
 
 // RMSE in metres of the edge network over whole episodes (from window 1, as
 // in a run), counting the windows from the first one in which an allowed
-// modality arrived. Keys: "all" (every modality that arrived), "camera",
-// "lidar", "radar" (only that one; the others masked as missing).
+// modality arrived, and only the scored ones (Episode::scored_windows). Keys: "all" (every modality
+// that arrived), "camera", "lidar", "radar" (only that one; the others masked as missing).
 struct Evaluation {
   std::map<std::string, double> rmse_m;
   std::map<std::string, std::size_t> windows;
 };
 
 struct TrainReport {
+  DataSplit split = DataSplit::kTrajectory;  // the Dataset's
   std::vector<StageReport> stages;
   std::vector<Eigen::Vector3d> candidate_offset_m;  // empty: not calibrated
   // On the held-out test split, per head trained, by its method's name

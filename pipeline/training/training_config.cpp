@@ -32,6 +32,15 @@ void Visit(V& v, TrainingConfig& c) {
   v("window_dropout", c.window_dropout, Rule::Probability());
   v("d_model", c.d_model, Rule::Range(1, 4096));
   v("layers", c.layers, Rule::Range(1, 64));
+  v("mica_lambda_init", c.mica_lambda_init, Rule::Range(-1e3, 1e3));
+  v.Enum("camera_stereo_branches", c.camera_stereo_branches,
+         std::vector<std::pair<const char*, StereoBranches>>{{"shared", StereoBranches::kShared},
+                                                             {"two", StereoBranches::kTwo}});
+  v("camera_eye_pool_side", c.camera_eye_pool_side, Rule::Range(0, 32));
+  v.Check(
+      c.camera_eye_pool_side == 0 || 32 % c.camera_eye_pool_side == 0, "camera_eye_pool_side",
+      "expected 0 (no pooling) or a divisor of 32, got " + std::to_string(c.camera_eye_pool_side));
+  v("camera_roi_geometry", c.camera_roi_geometry);
   v("selection_weight", c.selection_weight, Rule::NonNegative(100));
   v("selection_radius_m", c.selection_radius_m, Rule::Positive(1e4));
   v("filter_preference_m", c.filter_preference_m, Rule::NonNegative(100));

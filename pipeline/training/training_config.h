@@ -14,6 +14,7 @@
 #include <cstddef>
 #include <string>
 
+#include "pipeline/node/ib_cc_config.h"
 #include "sim/core/json_io.h"
 
 namespace uavsim::pipeline {
@@ -55,6 +56,15 @@ struct TrainingConfig {
   // Edge network sizes (paper silent; DESIGN.md: d_state 16, d_conv 4, expand 2).
   int d_model = 64;
   int layers = 2;
+  // MICA's λ^{m,n} at the start (paper Sec. VI: 0.5).
+  double mica_lambda_init = 0.5;
+  // The camera's feature encoder (IbCcConfig, pipeline/node/ib_cc_config.h):
+  // the paper's two parallel stereo branches or one shared CNN; the average
+  // pool of each eye's map (0: none, the paper's); the ROI geometry
+  // appended (ours). Their measured effects: NOTES.md.
+  StereoBranches camera_stereo_branches = StereoBranches::kShared;
+  int camera_eye_pool_side = 4;
+  bool camera_roi_geometry = true;
   // Anchored head: weight of the candidate-selection loss added to the
   // position loss, the cross-entropy of the candidate weights against the
   // valid candidate nearest the truth when it is within selection_radius_m,
@@ -88,7 +98,8 @@ struct TrainingConfig {
 };
 
 // The JSON keys are the field names, except mixture_loss ("position_loss":
-// "mixture" | "mean"). Each rule is checked when reading.
+// "mixture" | "mean"); camera_stereo_branches is "shared" | "two". Each rule is checked when
+// reading.
 template <class V>
 void Visit(V& v, TrainingConfig& c);
 

@@ -118,6 +118,23 @@ TEST_CASE("CLI: train --quick learns, is deterministic, and its model runs in th
     CHECK(ReadFile(dir + "/once/" + f) == ReadFile(dir + "/again/" + f));
     CHECK(ReadFile(dir + "/once/" + f) != ReadFile(model + "/" + f));  // it did train less
   }
+  // The frame split and a smaller training part, end to end from the
+  // command line (one epoch per stage).
+  {
+    auto t = RunCli({"train", kDefault, "--quick", "--out", dir + "/frame", "--data", data,
+                     "--split", "frame", "--train-episodes", "5", "--head", "paper", "--config-set",
+                     "/stage1_max_epochs=1", "--config-set", "/stage2_max_epochs=1", "--quiet"});
+    INFO(t.err);
+    REQUIRE(t.exit_code == 0);
+    const Json frame = Json::parse(ReadFile(dir + "/frame/training_report.json"));
+    CHECK(frame["split"] == "frame");
+    CHECK(Stage(frame, "fusion")["train_items"] == 5);        // the first 5 training episodes
+    CHECK(Stage(frame, "fusion")["validation_items"] == 17);  // every flight, its windows
+    CHECK(frame["test"]["uavloc"]["all"]["windows"].get<int>() > 0);
+    CHECK_THAT(Json::parse(ReadFile(dir + "/frame/model.json"))["note"].get<std::string>(),
+               Catch::Contains("windows by frame"));
+    CHECK(report["split"] == "trajectory");
+  }
   // An existing model folder is not replaced without --force.
   auto exists = RunCli({"train", kDefault, "--quick", "--out", model, "--data", data, "--quiet"});
   CHECK(exists.exit_code == 2);

@@ -57,7 +57,7 @@ TEST_CASE("ImageFeatureEncoder: Table I feature maps and output shapes", "[pipel
     CHECK(maps[1].min().item<float>() >= 0.0f);  // ReLU
     const torch::Tensor h = enc->forward(in.left, in.right, in.geometry);
     CHECK(h.sizes() == torch::IntArrayRef({b, 2 * 1024 + kCameraGeometryFeatures}));
-    CHECK(ImageFeatureEncoderImpl::kFeatures == 2066);
+    CHECK(enc->features() == 2066);
   }
 }
 
@@ -73,6 +73,62 @@ TEST_CASE("ImageFeatureEncoder: eyes share weights, order is kept, geometry is a
   CHECK(torch::allclose(h.slice(1, 0, 1024), swapped.slice(1, 1024, 2048)));
   CHECK(torch::allclose(h.slice(1, 1024, 2048), swapped.slice(1, 0, 1024)));
   CHECK(torch::equal(h.slice(1, 2048), in.geometry));
+}
+
+TEST_CASE("ImageFeatureEncoder: the paper's layout, two branches, no pool, no geometry",
+          "[pipeline]") {
+  InitTorch(1, 2);
+  ImageFeatureEncoder enc(0.1, StereoBranches::kTwo, 0, false);
+  enc->eval();
+  const IbInput in = RandomCameraInput(2);
+  const torch::Tensor h = enc->forward(in.left, in.right, in.geometry);
+  // 2 eyes x 64 x 32 x 32, nothing appended (issue 20's hint for Table III).
+  CHECK(enc->features() == 2 * 64 * 32 * 32);
+  CHECK(h.sizes() == torch::IntArrayRef({2, 131072}));
+  // Unpooled: the left half is the left branch's last map, flattened.
+  CHECK(torch::allclose(h.slice(1, 0, 65536), enc->FeatureMaps(in.left).back().flatten(1)));
+  CHECK(torch::allclose(h.slice(1, 65536), enc->FeatureMaps(in.right, true).back().flatten(1)));
+  // Two branches: each eye has its own weights (two sets of Table I's convs,
+  // 2 x (1*32*9 + 32 + 32*64*9 + 64) parameters), so swapping the eyes does
+  // not merely swap the halves.
+  std::int64_t parameters = 0;
+  for (const torch::Tensor& p : enc->parameters()) parameters += p.numel();
+  CHECK(parameters == 2 * (1 * 32 * 9 + 32 + 32 * 64 * 9 + 64));
+  const torch::Tensor swapped = enc->forward(in.right, in.left, in.geometry);
+  CHECK_FALSE(torch::allclose(h.slice(1, 0, 65536), swapped.slice(1, 65536)));
+  // Changing the geometry changes nothing without roi_geometry.
+  CHECK(torch::equal(h, enc->forward(in.left, in.right, in.geometry + 1.0)));
+  // A pool side that does not divide 32 is refused.
+  CHECK_THROWS_AS(ImageFeatureEncoder(0.1, StereoBranches::kTwo, 3, false), std::invalid_argument);
+}
+
+TEST_CASE("IbCcModel: the camera switches set the bottleneck's input width", "[pipeline]") {
+  InitTorch(1, 2);
+  const auto count = [](IbCcModel& m) {
+    std::int64_t n = 0;
+    for (const torch::Tensor& p : m->parameters()) n += p.numel();
+    return n;
+  };
+  IbCcConfig ours;
+  ours.modality = Modality::kCamera;
+  ours.latent_dim = 16;
+  IbCcConfig paper = ours;
+  paper.stereo_branches = StereoBranches::kTwo;
+  paper.eye_pool_side = 0;
+  paper.roi_geometry = false;
+  IbCcModel a(ours), b(paper);
+  // Hand count: convs, mu and sigma MLPs Linear(d, 128) -> Linear(128, z),
+  // decoder Linear(z, 128) -> Linear(128, 64) -> Linear(64, 3).
+  const auto expected = [](std::int64_t convs, std::int64_t d) {
+    const std::int64_t z = 16, conv = 1 * 32 * 9 + 32 + 32 * 64 * 9 + 64;
+    return convs * conv + 2 * (d * 128 + 128 + 128 * z + z) +
+           (z * 128 + 128 + 128 * 64 + 64 + 64 * 3 + 3);
+  };
+  CHECK(count(a) == expected(1, 2 * 1024 + 18));
+  CHECK(count(b) == expected(2, 2 * 65536));
+  const IbInput in = RandomCameraInput(3);
+  b->eval();
+  CHECK(b->Encode(in).sizes() == torch::IntArrayRef({3, 16}));
 }
 
 TEST_CASE("PointNetEncoder: 1024-d global feature for LiDAR and radar", "[pipeline]") {
@@ -283,7 +339,12 @@ TEST_CASE("MlpCompressor: same depth and parameter count as IbHead within 1%", "
       if (child->as<torch::nn::Linear>()) ++count;
     return count;
   };
-  for (std::int64_t d : {ImageFeatureEncoderImpl::kFeatures, PointNetEncoderImpl::kFeatures}) {
+  // The camera's width in our layout and in the paper's (no pool, no
+  // geometry), and the point encoders'.
+  const std::int64_t camera = ImageFeatureEncoder()->features();
+  const std::int64_t paper_camera =
+      ImageFeatureEncoder(0.1, StereoBranches::kTwo, 0, false)->features();
+  for (std::int64_t d : {camera, paper_camera, PointNetEncoderImpl::kFeatures}) {
     for (int z : kLatentSizes) {
       IbHead head(d, z);
       MlpCompressor mlp(d, z);

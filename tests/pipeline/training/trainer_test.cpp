@@ -598,3 +598,54 @@ TEST_CASE("Trainer: stage 1 leaves out observations of something other than the 
 }
 
 }  // namespace uavsim::pipeline
+
+namespace uavsim::pipeline {
+
+TEST_CASE("Trainer: a split by frame learns and scores each part's windows only",
+          "[pipeline][slow]") {
+  // Every episode in every part; window k is a test window when k % 7 == 3,
+  // a validation window when k % 7 == 5, else a training one.
+  const auto part_of = [](std::int64_t k) { return k % 7 == 3 ? 2 : k % 7 == 5 ? 1 : 0; };
+  Dataset data;
+  data.split = DataSplit::kFrame;
+  std::vector<Episode>* parts[3] = {&data.train, &data.validation, &data.test};
+  std::size_t lidar_train = 0, test_windows = 0;
+  for (int e = 0; e < 4; ++e) {
+    const Episode ep = MakeEpisode(e);
+    for (int j = 0; j < 3; ++j) {
+      Episode copy = ep;
+      for (std::int64_t k = 1; k <= kWindows; ++k)
+        copy.scored_windows.push_back(part_of(k) == j ? 1 : 0);
+      parts[j]->push_back(std::move(copy));
+    }
+    // Counted here from the capture times: window k holds (k-1) t^w <= t < k t^w.
+    for (const Sample& s : ep.samples)
+      if (s.modality == Modality::kLidar &&
+          part_of(static_cast<std::int64_t>(std::floor(s.t_s / kWindow)) + 1) == 0)
+        ++lidar_train;
+    for (std::int64_t k = 1; k <= kWindows; ++k) test_windows += part_of(k) == 2;
+  }
+  TrainOptions o = Tiny();
+  o.anchored_head = false;
+  InitTorch(1, kSeed);
+  const std::string dir = testing::TempDir("frame-split") + "/model";
+  const TrainReport r = TrainUavLoc(data, o, SomeManifest(), dir);
+  CHECK(r.split == DataSplit::kFrame);
+  CHECK(core::Json::parse(ReportJson(r, o))["split"] == "frame");
+  REQUIRE(r.stages.size() == 4);
+  // Stage 1 learns from the training windows' samples only.
+  CHECK(r.stages[1].name == "lidar");
+  CHECK(r.stages[1].train_items == lidar_train);
+  // Every modality arrives in window 1, so every test window is scored, and
+  // no other.
+  const Evaluation& test = r.test.at("uavloc");
+  CHECK(test.windows.at("all") == test_windows);
+  CHECK(std::isfinite(test.rmse_m.at("all")));
+  // The saved model, scored on the test part's episodes, counts the same.
+  InitTorch(1, kSeed);
+  const Evaluation again = EvaluateModel(dir, data.test).at("uavloc");
+  CHECK(again.windows.at("all") == test_windows);
+  CHECK(again.rmse_m.at("all") == Approx(test.rmse_m.at("all")).epsilon(1e-9));
+}
+
+}  // namespace uavsim::pipeline

@@ -45,6 +45,10 @@ TrainingConfig AllChanged() {
   c.window_dropout = 0.05;
   c.d_model = 32;
   c.layers = 3;
+  c.mica_lambda_init = 0.25;
+  c.camera_stereo_branches = StereoBranches::kTwo;
+  c.camera_eye_pool_side = 8;
+  c.camera_roi_geometry = false;
   c.selection_weight = 0.5;
   c.selection_radius_m = 1.5;
   c.filter_preference_m = 0.0;
@@ -130,6 +134,13 @@ TEST_CASE("TrainingConfig: unknown keys and bad values name the file, pointer, v
       "t.json: /stage1_max_samples_per_epoch: must be at least stage1_min_samples_per_epoch "
       "(500), got 400");
   CHECK_THAT(ErrorOf(Json::array()), Catch::StartsWith("t.json: "));
+  CHECK_THAT(
+      ErrorOf(Json{{"camera_stereo_branches", "three"}}),
+      Catch::StartsWith("t.json: /camera_stereo_branches: expected one of \"shared\", \"two\""));
+  CHECK(ErrorOf(Json{{"camera_eye_pool_side", 3}}) ==
+        "t.json: /camera_eye_pool_side: expected 0 (no pooling) or a divisor of 32, got 3");
+  CHECK_THAT(ErrorOf(Json{{"camera_roi_geometry", 1}}),
+             Catch::StartsWith("t.json: /camera_roi_geometry: "));
 
   // The same rules guard TrainOptions built in code.
   TrainOptions o;
@@ -140,6 +151,22 @@ TEST_CASE("TrainingConfig: unknown keys and bad values name the file, pointer, v
   o = TrainOptions{};
   o.latent_dim = 3;
   CHECK_THROWS_AS(o.Validate(), std::invalid_argument);
+}
+
+TEST_CASE("TrainingConfig: the paper's preset sets what Sec. VI and Sec. IV-B give", "[pipeline]") {
+  const std::string file = std::string(UAVSIM_SOURCE_DIR) + "/scenarios/training/paper.json";
+  const TrainingConfig paper = TrainingConfigFromJson(core::LoadJsonFile(file), file);
+  // Sec. VI: learning rate 1e-4, beta 1e-3, lambda 0.5, dropout 0.1.
+  CHECK(paper.stage1_lr == 1e-4);
+  CHECK(paper.stage2_lr == 1e-4);
+  CHECK(paper.beta == 1e-3);
+  CHECK(paper.mica_lambda_init == 0.5);
+  CHECK(paper.dropout == 0.1);
+  // Sec. IV-B: two parallel CNN branches; Table III's count: no pool, and
+  // the crop alone.
+  CHECK(paper.camera_stereo_branches == StereoBranches::kTwo);
+  CHECK(paper.camera_eye_pool_side == 0);
+  CHECK_FALSE(paper.camera_roi_geometry);
 }
 
 TEST_CASE("ModelManifest: records the training config, and reads models without one",
