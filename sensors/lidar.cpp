@@ -27,6 +27,10 @@ constexpr double kWavelengthNm = 905.0;
 constexpr double kPrism1Hz = 121.6;
 constexpr double kPrism2Hz = kPrism1Hz / 1.6180339887498949;
 
+// Mid-360-like scan (lidar.h): azimuth turns and elevation triangle-wave cycles per second.
+constexpr double kMid360AzimuthHz = 16.180339887498949;    // 10 x golden ratio
+constexpr double kMid360ElevationHz = 2236.0679774997897;  // 1000 x sqrt(5)
+
 // Rain (LISA, Kilic et al. 2021): Marshall-Palmer and water at 905 nm.
 constexpr double kMarshallPalmerN0 = 8000.0;  // m^-3 mm^-1
 constexpr double kWaterFresnel = 0.0199;      // ((1.328 - 1) / (1.328 + 1))^2
@@ -214,7 +218,8 @@ Lidar::Lidar(const LidarConfig& config, RaycastScene& scene) : config_(config), 
     }
   } else {
     Require(c.points_per_s > 0.0, "points_per_s must be positive");
-    Require(c.fov_deg > 0.0 && c.fov_deg <= 180.0, "fov_deg must be in (0, 180]");
+    if (c.preset == LidarPreset::kLivoxRosette)
+      Require(c.fov_deg > 0.0 && c.fov_deg <= 180.0, "fov_deg must be in (0, 180]");
   }
 
   // Slices split the sweep evenly in time; blocks of at most kBlockBeams
@@ -247,7 +252,7 @@ Lidar::Lidar(const LidarConfig& config, RaycastScene& scene) : config_(config), 
 }
 
 double Lidar::BeamTime(std::size_t i) const {
-  if (config_.preset == LidarPreset::kLivoxRosette)
+  if (config_.preset != LidarPreset::kSpinning32)
     return static_cast<double>(i) / config_.points_per_s;
   const std::size_t column = i / static_cast<std::size_t>(config_.channels);
   return period_s_ * static_cast<double>(column) / static_cast<double>(columns_);
@@ -268,6 +273,24 @@ void Lidar::BlockRays(std::size_t begin, std::size_t end, double t_start_s, Ray*
       const std::size_t k = i / ch, c = i % ch;
       rays[i - begin].direction =
           R_WS_ * Eigen::Vector3f(cos_el_[c] * cos_az_[k], cos_el_[c] * sin_az_[k], sin_el_[c]);
+    }
+    return;
+  }
+  if (config_.preset == LidarPreset::kLivoxMid360) {
+    // Fractional turns and cycles at the frame start (exact for hours of
+    // simulated time), then per beam from its offset into the frame.
+    const double a0 = kMid360AzimuthHz * t_start_s - std::floor(kMid360AzimuthHz * t_start_s);
+    const double e0 = kMid360ElevationHz * t_start_s - std::floor(kMid360ElevationHz * t_start_s);
+    const double el_lo = kMid360MinElevationDeg * kPi / 180.0;
+    const double el_span = (kMid360MaxElevationDeg - kMid360MinElevationDeg) * kPi / 180.0;
+    for (std::size_t i = begin; i < end; ++i) {
+      const double t = BeamTime(i);
+      const double az = 2.0 * kPi * (a0 + kMid360AzimuthHz * t);
+      const double u = e0 + kMid360ElevationHz * t;
+      const double el = el_lo + el_span * (1.0 - std::abs(1.0 - 2.0 * (u - std::floor(u))));
+      rays[i - begin].direction = R_WS_ * Eigen::Vector3d(std::cos(el) * std::cos(az),
+                                                          std::cos(el) * std::sin(az), std::sin(el))
+                                              .cast<float>();
     }
     return;
   }

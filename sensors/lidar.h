@@ -16,6 +16,19 @@
 //    and never closes: every petal crosses the centre, and coverage of the
 //    circular fov_deg grows with integration time, as on Livox Mid-40/Avia.
 //    The pattern runs on absolute time, so consecutive frames differ.
+//  - livox_mid360: beam i fires at t_i = i / points_per_s, N =
+//    ceil(points_per_s / rate_hz) beams a frame (as the rosette). A Mid-360-
+//    like scan over 360 deg x [-7, 52] deg: the azimuth turns
+//    counter-clockwise about +z at f_az = 10 phi Hz (phi the golden ratio),
+//    az(t) = 2 pi f_az t, and the elevation sweeps the field in a triangle
+//    wave of f_el = 1000 sqrt(5) Hz, el(t) = el_min + (el_max - el_min)
+//    (1 - |1 - 2 frac(f_el t)|), uniform in elevation. f_az / rate_hz and
+//    f_el / f_az are irrational, so the scan never repeats and fills in over
+//    time. At 200 000 points/s each 0.1 s frame spans 1.6 turns, its
+//    zigzags about 1.3 deg apart in azimuth and its points about 1.3 deg
+//    apart in elevation. Like the rosette, on absolute time. (Livox does not
+//    publish the Mid-360's pattern; this is its field, rate and
+//    non-repetitiveness, not its exact trajectory.)
 //
 // Detection, in normalised power units (m^-2):
 //   P(R) = rho * cos(i) * xi(R) * exp(-2 alpha R) / R^2,

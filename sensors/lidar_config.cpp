@@ -11,7 +11,7 @@ using core::FormatNumber;
 using core::Rule;
 
 double LidarConfig::RaysPerFrame() const {
-  if (preset == LidarPreset::kLivoxRosette) return std::ceil(points_per_s / timing.rate_hz);
+  if (preset != LidarPreset::kSpinning32) return std::ceil(points_per_s / timing.rate_hz);
   return channels * std::ceil(360.0 / azimuth_resolution_deg);
 }
 
@@ -20,7 +20,9 @@ void Visit(V& v, LidarConfig& c) {
   VisitTiming(v, c.timing);
   v.Object("pose", c.pose);
   v.Enum("preset", c.preset,
-         {{"spinning32", LidarPreset::kSpinning32}, {"livox_rosette", LidarPreset::kLivoxRosette}});
+         {{"spinning32", LidarPreset::kSpinning32},
+          {"livox_rosette", LidarPreset::kLivoxRosette},
+          {"livox_mid360", LidarPreset::kLivoxMid360}});
   if (c.preset == LidarPreset::kSpinning32) {
     v("channels", c.channels, Rule::Range(1, 128));
     v("vertical_min_deg", c.vertical_min_deg, Rule::Range(-90.0, 90.0));
@@ -37,7 +39,8 @@ void Visit(V& v, LidarConfig& c) {
     v("azimuth_resolution_deg", c.azimuth_resolution_deg, Rule::Range(0.001, 45.0));
   } else {
     v("points_per_s", c.points_per_s, Rule::Positive(1e9));
-    v("fov_deg", c.fov_deg, Rule{0.0, 180.0, true, false});
+    if (c.preset == LidarPreset::kLivoxRosette)
+      v("fov_deg", c.fov_deg, Rule{0.0, 180.0, true, false});
   }
   v("max_range_m", c.max_range_m, Rule::Positive(10000.0));
   v("range_noise_m", c.range_noise_m, Rule::NonNegative(10.0));

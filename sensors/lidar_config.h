@@ -1,6 +1,9 @@
 // LiDAR parameters. Presets: "spinning32" (32 channels, 360 deg, fixed
-// vertical angles) and "livox_rosette" (Livox-like non-repetitive rosette,
-// points_per_s over a circular field of view). Ranges in metres.
+// vertical angles), "livox_rosette" (Livox Avia-like non-repetitive rosette,
+// points_per_s over a circular field of view) and "livox_mid360" (Livox
+// Mid-360-like non-repetitive scan, points_per_s over 360 deg of azimuth and
+// the fixed elevations kMid360MinElevationDeg .. kMid360MaxElevationDeg).
+// Ranges in metres.
 //
 // Detection (sensors/lidar.h has the model): a return is detected when
 // rho * cos(incidence) * overlap(R) * exp(-2 alpha R) / R^2 reaches the
@@ -17,7 +20,12 @@
 
 namespace uavsim::sensors {
 
-enum class LidarPreset { kSpinning32, kLivoxRosette };
+enum class LidarPreset { kSpinning32, kLivoxRosette, kLivoxMid360 };
+
+// The Mid-360's field of view (Livox's specification: 360 deg x 59 deg, from
+// -7 deg to +52 deg of elevation in its own frame, x forward, z up).
+constexpr double kMid360MinElevationDeg = -7.0;
+constexpr double kMid360MaxElevationDeg = 52.0;
 
 // Which echo a beam reports when fog, rain and a target all return one.
 enum class LidarReturnMode {
@@ -39,8 +47,9 @@ struct LidarConfig {
   // entries and the min/max keys are not used.
   std::vector<double> vertical_angles_deg;
   double azimuth_resolution_deg = 0.2;
-  // rosette
+  // rosette and mid360
   double points_per_s = 240000.0;
+  // rosette only
   double fov_deg = 70.0;
   // both
   double max_range_m = 200.0;

@@ -67,12 +67,37 @@ std::vector<NodeConfig> Scenario::DefaultNodes() {
   return {cam, lidar, radar};
 }
 
+// UAV sizes: a few centimetres to an airliner's wing is already generous.
+const Rule kUavSize{0.01, 20.0, false, false};
+
+template <class V>
+void Visit(V& v, FlightBoxConfig& c) {
+  const Rule coordinate = Rule::Range(-1e5, 1e5);
+  v("min_m", c.min_m, coordinate);
+  v("max_m", c.max_m, coordinate);
+  static const char* const kAxis[] = {"x", "y", "z"};
+  for (int k = 0; k < 3; ++k)
+    v.Check(c.min_m[k] < c.max_m[k], "max_m",
+            std::string("min_m[") + std::to_string(k) + "] (" + core::FormatNumber(c.min_m[k]) +
+                ") must be less than max_m[" + std::to_string(k) + "] (" +
+                core::FormatNumber(c.max_m[k]) + "): the box is empty along " + kAxis[k]);
+}
+UAVSIM_INSTANTIATE_VISIT(FlightBoxConfig);
+
+template <class V>
+void Visit(V& v, EpisodeVariationConfig& c) {
+  v("sizes_m", c.sizes_m, kUavSize, 0, 64);
+  v.Array("regions", c.regions, 0, 64);
+}
+UAVSIM_INSTANTIATE_VISIT(EpisodeVariationConfig);
+
 template <class V>
 void Visit(V& v, UavConfig& c) {
   v("id", c.id);
   CheckId(v, "id", c.id);
-  v("size_m", c.size_m, Rule{0.01, 20.0, false, false});
+  v("size_m", c.size_m, kUavSize);
   v.Object("trajectory", c.trajectory);
+  v.Object("episodes", c.episodes);
 }
 UAVSIM_INSTANTIATE_VISIT(UavConfig);
 

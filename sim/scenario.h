@@ -22,10 +22,32 @@
 
 namespace uavsim::sim {
 
+// A box in the world (ENU, metres), min_m < max_m on every axis.
+struct FlightBoxConfig {
+  Eigen::Vector3d min_m{-30.0, -30.0, 15.0};
+  Eigen::Vector3d max_m{30.0, 30.0, 50.0};
+};
+
+// How `uavsim train` varies the target (uavs[0]) from one training episode
+// to the next (sim/train.h); a run, and any other UAV, ignores it. Empty
+// lists change nothing: the target keeps size_m, and its episodes fly
+// around the region its own trajectory covers over the scenario's duration,
+// widened by 10 m.
+struct EpisodeVariationConfig {
+  // Each episode's target draws one size (x, y, z in metres, as size_m),
+  // uniformly.
+  std::vector<Eigen::Vector3d> sizes_m;
+  // Episode i flies in regions[(i / 3) % n] (i % 3 picks its trajectory
+  // type, so every region gets every type), a box used as the widened
+  // region above.
+  std::vector<FlightBoxConfig> regions;
+};
+
 struct UavConfig {
   std::string id = "target";
   Eigen::Vector3d size_m{0.5, 0.5, 0.2};
   core::TrajectoryConfig trajectory;
+  EpisodeVariationConfig episodes;
 };
 
 struct DistractorsConfig {
@@ -84,6 +106,10 @@ struct Scenario {
   static std::vector<NodeConfig> DefaultNodes();
 };
 
+template <class V>
+void Visit(V& v, FlightBoxConfig& c);
+template <class V>
+void Visit(V& v, EpisodeVariationConfig& c);
 template <class V>
 void Visit(V& v, UavConfig& c);
 template <class V>

@@ -109,8 +109,16 @@ Scenario EpisodeScenario(const Scenario& base, const EpisodePlan& plan, int i, s
   core::RngStream rng(plan.seed, "train/episode/" + std::to_string(i));
   core::Json doc = ResolvedJson(base);
   std::string what;
-  doc["uavs"][0]["trajectory"] =
-      DrawTrajectory(base.uavs.front().trajectory, RegionOf(base), i, rng, what);
+  const EpisodeVariationConfig& vary = base.uavs.front().episodes;
+  FlightRegion region;
+  if (vary.regions.empty()) {
+    region = RegionOf(base);
+  } else {
+    const FlightBoxConfig& box =
+        vary.regions[static_cast<std::size_t>(i / 3) % vary.regions.size()];
+    region = {box.min_m, box.max_m};
+  }
+  doc["uavs"][0]["trajectory"] = DrawTrajectory(base.uavs.front().trajectory, region, i, rng, what);
   doc["seed"] = rng.NextU64() >> 12;
   doc["duration_s"] = plan.episode_s;
   doc["name"] = base.name + "-episode-" + std::to_string(i);
@@ -133,6 +141,13 @@ Scenario EpisodeScenario(const Scenario& base, const EpisodePlan& plan, int i, s
     for (auto& [name, link] : doc["links"].items())
       link["loss"] = {{"type", "bernoulli"}, {"p", p}};
     what += ", loss " + core::FormatNumber(std::round(p * 100)) + " %";
+  }
+  // Drawn last, so that a scenario without sizes draws what it drew before.
+  if (!vary.sizes_m.empty()) {
+    const Eigen::Vector3d size = vary.sizes_m[rng.UniformInt(vary.sizes_m.size())];
+    doc["uavs"][0]["size_m"] = Vec(size);
+    what += ", size " + core::FormatNumber(size.x()) + " x " + core::FormatNumber(size.y()) +
+            " x " + core::FormatNumber(size.z()) + " m";
   }
   if (label) *label = what;
   return ScenarioFromJson(doc, base.name + " (training episode " + std::to_string(i) + ")",

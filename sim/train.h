@@ -32,7 +32,9 @@ struct EpisodePlan {
 };
 
 // The scenario of episode i: `base` with the target's trajectory, seed,
-// weather and loss drawn from the plan. `label` says what was drawn.
+// weather and loss drawn from the plan, and, when the target's `episodes`
+// lists them (sim/scenario.h), its flight region and size. `label` says
+// what was drawn.
 Scenario EpisodeScenario(const Scenario& base, const EpisodePlan& plan, int i,
                          std::string* label = nullptr);
 

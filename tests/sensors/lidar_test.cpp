@@ -521,6 +521,76 @@ TEST_CASE("Lidar: the rosette stays in its field of view and fills it over time"
   }
 }
 
+TEST_CASE("Lidar: the Mid-360 scan covers 360 x 59 deg (-7 to +52) at points_per_s", "[sensors]") {
+  LidarConfig c = QuietSpinning();
+  c.preset = LidarPreset::kLivoxMid360;
+  c.points_per_s = 200000;
+  c.pose.rpy_deg = {0.0, 0.0, 30.0};  // a yaw turns the azimuths only
+  WorldGeometry w;
+  RaycastScene scene(w);
+  Lidar lidar(c, scene);
+  // Point rate: ceil(points_per_s / rate_hz) beams a frame, beam i at i / points_per_s.
+  CHECK(c.RaysPerFrame() == 20000.0);
+  const auto beams = lidar.Beams(3.7);
+  REQUIRE(beams.size() == 20000);
+  double el_min = 90, el_max = -90;
+  // Occupied 10 deg (azimuth) x 5 deg (elevation) cells of the field in one frame.
+  std::set<std::pair<int, int>> cells;
+  for (std::size_t i = 0; i < beams.size(); ++i) {
+    CHECK(beams[i].t_offset_s == Approx(i / 200000.0).margin(1e-7));
+    const Eigen::Vector3f& d = beams[i].ray.direction;
+    CHECK(d.norm() == Approx(1.0).margin(1e-5));
+    const double el = std::asin(std::clamp(d.z(), -1.0f, 1.0f)) * 180 / kPi;
+    const double az = std::atan2(d.y(), d.x()) * 180 / kPi + 180.0;  // [0, 360]
+    el_min = std::min(el_min, el);
+    el_max = std::max(el_max, el);
+    cells.insert({static_cast<int>(az / 10.0) % 36, static_cast<int>((el + 7.0) / 5.0)});
+  }
+  CHECK(el_min >= -7.0 - 1e-3);
+  CHECK(el_max <= 52.0 + 1e-3);
+  CHECK(el_min < -6.5);  // the whole field is swept, not a band of it
+  CHECK(el_max > 51.5);
+  // 36 azimuth sectors x 12 elevation bands (the last one 4 deg tall): every one hit.
+  CHECK(cells.size() == 36 * 12);
+  // Non-repetitive: the next frame's beams are not this frame's.
+  const auto next = lidar.Beams(3.8);
+  int same = 0;
+  for (std::size_t i = 0; i < beams.size(); ++i)
+    same += (next[i].ray.direction - beams[i].ray.direction).norm() < 1e-3f;
+  CHECK(same < 200);
+  // Upright at h above a ground plane of reflectivity rho, a beam at
+  // elevation el < 0 meets it at R = h / sin(-el) with cos(i) = sin(-el) and
+  // is detected iff rho sin(-el) / R^2 >= reference_reflectivity /
+  // max_range_m^2 (lidar.h): count those beams from their directions alone.
+  const double h = 2.0, rho = 0.5;
+  c.pose.position_m = {0.0, 0.0, h};
+  c.pose.rpy_deg = {0.0, 0.0, 0.0};
+  std::uint32_t m;
+  WorldGeometry ground = WorldWith(rho, &m);
+  ground.meshes.push_back(
+      BoxMesh(Eigen::Vector3f(-500, -500, -1), Eigen::Vector3f(500, 500, 0), m));
+  Lidar upright(c, scene);
+  int expected = 0, below = 0, marginal = 0;
+  const double p_th = c.reference_reflectivity / (c.max_range_m * c.max_range_m);
+  for (const auto& b : upright.Beams(0.0)) {
+    const double s_el = -static_cast<double>(b.ray.direction.z());
+    if (s_el <= 0) continue;
+    ++below;
+    const double r = h / s_el, p = rho * s_el / (r * r);
+    expected += p >= p_th;
+    marginal += std::abs(p / p_th - 1.0) < 1e-4;
+  }
+  // 7 / 59 of the beams point below the horizon (uniform in elevation); of
+  // those, the ones steeper than asin((P_th h^2 / rho)^(1/3)) = 1.55 deg are
+  // detected.
+  CHECK(static_cast<double>(below) / 20000.0 == Approx(7.0 / 59.0).margin(0.005));
+  const double cut_deg = std::asin(std::cbrt(p_th * h * h / rho)) * 180 / kPi;
+  CHECK(static_cast<double>(expected) / below == Approx((7.0 - cut_deg) / 7.0).margin(0.02));
+  const PointCloudFrame f = CaptureOnce(c, ground);
+  CHECK(std::abs(static_cast<int>(f.points.size()) - expected) <= marginal);
+  for (const LidarPoint& p : f.points) CHECK(std::abs(p.z_m) < 1e-3);
+}
+
 TEST_CASE("LidarConfig: rules name the field, the value and the rule", "[sensors]") {
   auto error_of = [](const std::string& text) {
     LidarConfig c;

@@ -375,6 +375,40 @@ TEST_CASE("CLI: run writes the run directory of DESIGN.md", "[sim][slow]") {
   CHECK(CountLines(ReadFile(out + "/truth.csv")) == 1 + 2 * 20);
 }
 
+TEST_CASE("CLI: the MMAUD twin runs end to end, its two LiDARs as two nodes of one modality",
+          "[sim][slow]") {
+  const std::string out = TempDir("twin") + "/r";
+  auto r = RunCli({"run", std::string(UAVSIM_SOURCE_DIR) + "/scenarios/mmaud_twin.json", "--out",
+                   out, "--duration", "1"});
+  REQUIRE(r.exit_code == 0);
+  // The shipped model was trained on the default city: it runs, with a
+  // warning (not --quiet).
+  CHECK_THAT(r.err, Catch::Contains("another world or node layout"));
+  const Json metrics = Json::parse(ReadFile(out + "/metrics.json"));
+  // Frame timers over 1 s: the pair at 30 Hz, each LiDAR at 10 Hz, the radar at 15 Hz.
+  CHECK(metrics["modalities"]["camera"]["frames"] == 30);
+  CHECK(metrics["modalities"]["lidar"]["frames"] == 2 * 10);
+  CHECK(metrics["modalities"]["radar"]["frames"] == 15);
+  CHECK(metrics["modalities"]["lidar"]["packets_delivered"] == 20);
+  // MMAUD's images: 2560 x 960 8-bit (two 1280 x 960 eyes) at 30 Hz.
+  CHECK(metrics["data_rate_kBps"]["camera"]["raw"].get<double>() ==
+        Approx(2 * 1280 * 960 * 30 / 1000.0));
+  CHECK(metrics["uavloc_model"]["same_layout"] == false);
+  // Each LiDAR node sends its own messages, numbered on its own.
+  const std::string packets = ReadFile(out + "/packets.csv");
+  for (const char* node : {"avia", "mid360"}) {
+    INFO(node);
+    std::size_t rows = 0;
+    for (std::size_t at = 0;
+         (at = packets.find("," + std::string(node) + ",lidar,", at)) != std::string::npos; ++at)
+      ++rows;
+    CHECK(rows == 10);
+    CHECK(packets.find("," + std::string(node) + ",lidar,9,") != std::string::npos);
+  }
+  for (const char* m : {"uavloc", "uavloc_anchored", "anchor_track", "ekf"})
+    CHECK(metrics["rmse_m"].contains(m));
+}
+
 TEST_CASE("CLI: the same scenario and seed give byte-identical files, another seed differs",
           "[sim][slow]") {
   const std::string dir = TempDir("determinism");

@@ -2,7 +2,10 @@
 
 #include <catch2/catch.hpp>
 #include <filesystem>
+#include <map>
+#include <set>
 
+#include "sim/edge_server.h"
 #include "test_support.h"
 
 using uavsim::core::ConfigError;
@@ -40,14 +43,65 @@ TEST_CASE("Scenario: scenarios/default.json spells out exactly the defaults", "[
 }
 
 TEST_CASE("Scenario: every shipped scenario validates", "[sim]") {
-  int count = 0;
+  // What `uavsim validate` checks: the file, and the trained model its
+  // methods need (manifest, checksums, heads, latent size, window).
+  std::set<std::string> names;
   for (const auto& e : std::filesystem::directory_iterator(kScenarios)) {
     if (e.path().extension() != ".json") continue;
     INFO(e.path().string());
-    CHECK_NOTHROW(LoadScenario(e.path().string()));
-    ++count;
+    CHECK_NOTHROW(
+        uavsim::sim::CheckTrainedModel(LoadScenario(e.path().string()), e.path().string()));
+    names.insert(e.path().stem().string());
   }
-  CHECK(count >= 1);
+  for (const char* shipped :
+       {"default", "city_open_field", "city_urban_canyon", "city_mesh_example", "mmaud_twin"})
+    CHECK(names.count(shipped) == 1);
+}
+
+TEST_CASE("Scenario: the MMAUD twin has MMAUD's rig and flights", "[sim]") {
+  // /work/shared/reference/mmaud.md: one rig; stereo fisheye 2560 x 960 (two
+  // 1280 x 960 eyes) at 30 Hz; a Livox Avia and a Mid-360 at 10 Hz; a radar
+  // of about 120 x 40 deg at 15 Hz; sequences of about 20 s; DJI drones from
+  // Mavic 3 to M300 size, below 30 m on a rooftop and up to 100 m over a car park.
+  using uavsim::sensors::LidarPreset;
+  using uavsim::sensors::SensorType;
+  const Scenario s = LoadScenario(kScenarios + "/mmaud_twin.json");
+  CHECK(s.duration_s == 20.0);
+  REQUIRE(s.nodes.size() == 4);
+  std::map<std::string, int> kinds;
+  for (const auto& n : s.nodes) {
+    const auto& c = n.sensor;
+    // Co-located: every sensor within 0.5 m of the first.
+    CHECK((c.pose().position_m - s.nodes[0].sensor.pose().position_m).norm() < 0.5);
+    if (c.type == SensorType::kFisheyeStereo) {
+      CHECK(c.fisheye.width_px == 1280);
+      CHECK(c.fisheye.height_px == 960);
+      CHECK(c.timing().rate_hz == 30.0);
+      ++kinds["camera"];
+    } else if (c.type == SensorType::kLidar) {
+      CHECK(c.timing().rate_hz == 10.0);
+      ++kinds[c.lidar.preset == LidarPreset::kLivoxRosette  ? "avia"
+              : c.lidar.preset == LidarPreset::kLivoxMid360 ? "mid360"
+                                                            : "other"];
+    } else {
+      CHECK(c.timing().rate_hz == 15.0);
+      CHECK(c.radar.fov_azimuth_deg == 120.0);
+      CHECK(c.radar.fov_elevation_deg == 40.0);
+      ++kinds["radar"];
+    }
+  }
+  CHECK(kinds ==
+        std::map<std::string, int>{{"camera", 1}, {"avia", 1}, {"mid360", 1}, {"radar", 1}});
+  const auto& target = s.uavs[0];
+  const auto& vary = target.episodes;
+  REQUIRE(vary.sizes_m.size() >= 2);
+  for (const auto& size : vary.sizes_m) {
+    CHECK(size.maxCoeff() >= 0.35 - 1e-9);  // Mavic 3 ...
+    CHECK(size.maxCoeff() <= 0.81 + 1e-9);  // ... to M300
+  }
+  REQUIRE(vary.regions.size() == 2);
+  CHECK(vary.regions[0].max_m.z() <= 30.0);   // rooftop flights
+  CHECK(vary.regions[1].max_m.z() >= 100.0);  // car park flights
 }
 
 TEST_CASE("Scenario: --set overrides address the document by JSON pointer", "[sim]") {

@@ -376,6 +376,61 @@ TEST_CASE("Training episodes vary the trajectory, seed, weather and loss within 
   }
 }
 
+TEST_CASE("Training episodes draw the target's size and flight region from its episodes lists",
+          "[sim][train]") {
+  const auto plain = uavsim::sim::LoadScenario(kDefault);
+  auto base = plain;
+  const std::vector<Eigen::Vector3d> sizes{
+      {0.35, 0.28, 0.11}, {0.47, 0.59, 0.22}, {0.81, 0.67, 0.43}};
+  base.uavs[0].episodes.sizes_m = sizes;
+  uavsim::sim::EpisodePlan plan;
+  std::set<std::size_t> drawn;
+  for (int i = 0; i < 30; ++i) {
+    const auto s = uavsim::sim::EpisodeScenario(base, plan, i);
+    const auto it = std::find(sizes.begin(), sizes.end(), s.uavs[0].size_m);
+    REQUIRE(it != sizes.end());
+    drawn.insert(static_cast<std::size_t>(it - sizes.begin()));
+    // Drawn last: the rest of the episode is the one drawn without sizes.
+    Json with = uavsim::sim::ResolvedJson(s);
+    Json without = uavsim::sim::ResolvedJson(uavsim::sim::EpisodeScenario(plain, plan, i));
+    with["uavs"][0].erase("size_m");
+    with["uavs"][0].erase("episodes");
+    without["uavs"][0].erase("size_m");
+    without["uavs"][0].erase("episodes");
+    CHECK(with == without);
+  }
+  CHECK(drawn.size() == 3);
+  // Regions: episode i flies in regions[(i / 3) % 2]; a random flight keeps
+  // to the box, an orbit or figure eight flies at an altitude inside it.
+  auto regions = plain;
+  uavsim::sim::FlightBoxConfig low, high;
+  low.min_m = {-40, -40, 14};
+  low.max_m = {40, 40, 30};
+  high.min_m = {20, -50, 30};
+  high.max_m = {120, 50, 100};
+  regions.uavs[0].episodes.regions = {low, high};
+  for (int i = 0; i < 24; ++i) {
+    INFO("episode " << i);
+    const auto s = uavsim::sim::EpisodeScenario(regions, plan, i);
+    const auto& box = (i / 3) % 2 == 0 ? low : high;
+    const auto& t = s.uavs[0].trajectory;
+    if (t.type == uavsim::core::TrajectoryType::kRandom) {
+      CHECK(t.min_m == box.min_m);
+      CHECK(t.max_m == box.max_m);
+    } else {
+      CHECK(t.center_m.z() >= box.min_m.z());
+      CHECK(t.center_m.z() <= box.max_m.z());
+    }
+  }
+  // A box must not be empty.
+  Json doc = uavsim::sim::ResolvedJson(plain);
+  doc["uavs"][0]["episodes"]["regions"] =
+      Json::parse(R"([{"min_m": [0, 0, 50], "max_m": [10, 10, 40]}])");
+  CHECK_THAT(
+      uavsim::testing::ConfigErrorOf([&] { uavsim::sim::ScenarioFromJson(doc, "e.json", "."); }),
+      Catch::StartsWith("e.json: /uavs/0/episodes/regions/0/max_m: min_m[2] (50) must be less"));
+}
+
 TEST_CASE("The default model: three modalities beat each single one on held-out trajectories",
           "[sim][train][slow]") {
   uavsim::pipeline::InitTorch(1, 1);
