@@ -22,7 +22,7 @@ enum class EkfMotionModel {
 };
 
 struct EkfConfig {
-  EkfMotionModel motion_model = EkfMotionModel::kImm;
+  EkfMotionModel motion_model = EkfMotionModel::kImmCaCt;
 
   // The target: its trajectory's limits and its size. Not scenario keys: the
   // engine copies uavs[0].trajectory.max_speed_mps, max_accel_mps2 and
@@ -53,8 +53,9 @@ struct EkfConfig {
   // q_w = (ct_turn_rate_fraction a_max / v_max)^2 / maneuver_time_s
   // (rad^2/s^3); mean time (s) spent in the mode before switching. The CV
   // mode of every IMM uses imm_cv_accel_fraction and imm_cv_sojourn_s.
-  double ct_accel_fraction = 0.03;
-  double ct_turn_rate_fraction = 0.05;
+  // The defaults: "[tuning]", "coordinated-turn noise sweep" (ekf.h).
+  double ct_accel_fraction = 0.01;
+  double ct_turn_rate_fraction = 0.02;
   double imm_ct_sojourn_s = 3.0;
 
   // Gating and track management.

@@ -560,7 +560,9 @@ TEST_CASE(
     ct.motion_model = EkfMotionModel::kImmCt;
     ct.imm_cv_sojourn_s = 0.01;
     ct.imm_ct_sojourn_s = 1e4;
-    Ekf turn(ct), imm{EkfConfig{}};
+    EkfConfig cv_ca;
+    cv_ca.motion_model = EkfMotionModel::kImm;
+    Ekf turn(ct), imm(cv_ca);
     const double phi0 = 0.7, t_end = 30.0;
     for (Ekf* e : {&turn, &imm}) {
       e->AddPositionSource("fix");
@@ -960,7 +962,9 @@ TEST_CASE("Ekf: IMM mode probabilities follow the manoeuvre", "[pipeline]") {
   // Straight flight, then a constant 3 m/s^2 sideways from t = 10 s: the
   // CA mode (smooth turns) explains a steady acceleration best; the CV mode
   // (manoeuvres) takes over at the jump of the acceleration.
-  Ekf ekf{EkfConfig{}};  // "imm" by default
+  EkfConfig config;
+  config.motion_model = EkfMotionModel::kImm;
+  Ekf ekf(config);
   ekf.AddPositionSource("fix");
   RngStream rng(9, "imm");
   auto truth = [](double t) {
@@ -1252,13 +1256,13 @@ TEST_CASE("Ekf: coordinated-turn noise sweep (tuning record)", "[.][tuning][pipe
   char label[64];
   episodes.Report("imm (defaults)", EkfConfig{});
   for (EkfMotionModel model : {EkfMotionModel::kImmCt, EkfMotionModel::kImmCaCt})
-    for (double a : {0.01, 0.03, 0.1, 0.3})
-      for (double w : {0.02, 0.05, 0.2}) {
+    for (double a : {0.003, 0.01, 0.03, 0.1, 0.3})
+      for (double w : {0.005, 0.02, 0.05, 0.2}) {
         EkfConfig c;
         c.motion_model = model;
         c.ct_accel_fraction = a;
         c.ct_turn_rate_fraction = w;
-        std::snprintf(label, sizeof label, "%s ct accel %.2f rate %.2f",
+        std::snprintf(label, sizeof label, "%s ct accel %.3f rate %.3f",
                       model == EkfMotionModel::kImmCt ? "imm_ct" : "imm_ca_ct", a, w);
         episodes.Report(label, c);
       }
