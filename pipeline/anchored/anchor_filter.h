@@ -13,7 +13,8 @@
 //     F = [1 dt dt^2/2; 0 1 dt; 0 0 1],
 //     Q = q_j [dt^5/20 dt^4/8 dt^3/6; dt^4/8 dt^3/3 dt^2/2; dt^3/6 dt^2/2 dt]
 //   coordinated turn (horizontal velocity turning at the rate omega, about
-//   the vertical; vertical velocity constant; a stays 0; Eq. 11.7.1-4):
+//   the vertical; vertical velocity constant; a stays 0; Eq. 11.7.1-4;
+//   CoordinatedTurn in pipeline/tracking/coordinated_turn.h):
 //     p_xy += [sin(w dt)  -(1 - cos(w dt)); 1 - cos(w dt)  sin(w dt)] v_xy / w,
 //     v_xy  = [cos -sin; sin cos](w dt) v_xy,  p_z += v_z dt,
 //     Q the constant-velocity Q with q_a on [p, v] plus q_w dt on omega
@@ -62,6 +63,7 @@
 
 #include "pipeline/anchored/geometric_anchor.h"
 #include "pipeline/node/observations.h"
+#include "pipeline/tracking/coordinated_turn.h"  // CoordinatedTurn, the turn mode
 #include "pipeline/tracking/imm.h"
 
 namespace uavsim::pipeline {
@@ -161,10 +163,5 @@ class AnchorFilter {
   std::optional<GeometricAnchor> ray_;                         // the latest camera ray
   std::optional<std::pair<Eigen::Vector3d, double>> pending_;  // a radar start to confirm: p, t
 };
-
-// The IMM's coordinated turn on x = [p, v, a, omega]: the state dt ahead (a
-// set to 0) and its Jacobian d next / d x. Public for the tests.
-void CoordinatedTurn(const Eigen::Matrix<double, 10, 1>& x, double dt,
-                     Eigen::Matrix<double, 10, 1>& next, Eigen::Matrix<double, 10, 10>& jacobian);
 
 }  // namespace uavsim::pipeline

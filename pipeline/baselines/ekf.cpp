@@ -11,6 +11,7 @@
 #include <unsupported/Eigen/MatrixFunctions>
 #include <utility>
 
+#include "pipeline/tracking/coordinated_turn.h"
 #include "sim/core/physical_constants.h"
 
 namespace uavsim::pipeline {
@@ -226,18 +227,20 @@ double ChiSquareQuantile(double p, int dof) {
 // --- The filter ----------------------------------------------------------
 
 Ekf::Ekf(const EkfConfig& config) : config_(config) {
-  modes_.push_back({false, CvAccelPsd(), config_.imm_cv_sojourn_s});
-  if (config_.motion_model == EkfMotionModel::kImm) {
-    modes_.push_back({true, CaJerkPsd(), config_.imm_ca_sojourn_s});
-  }
+  const EkfMotionModel motion = config_.motion_model;
+  modes_.push_back({ModeKind::kCv, CvAccelPsd(), 0.0, config_.imm_cv_sojourn_s});
+  if (motion == EkfMotionModel::kImm || motion == EkfMotionModel::kImmCaCt)
+    modes_.push_back({ModeKind::kCa, CaJerkPsd(), 0.0, config_.imm_ca_sojourn_s});
+  if (motion == EkfMotionModel::kImmCt || motion == EkfMotionModel::kImmCaCt)
+    modes_.push_back({ModeKind::kCt, CtAccelPsd(), CtTurnRatePsd(), config_.imm_ct_sojourn_s});
   for (int dof = 0; dof <= 8; ++dof)
     gate_by_dof_.push_back(dof == 0 ? 0.0 : ChiSquareQuantile(config_.gate_probability, dof));
 }
 
 double Ekf::CvAccelPsd() const {
-  const double fraction = config_.motion_model == EkfMotionModel::kImm
-                              ? config_.imm_cv_accel_fraction
-                              : config_.cv_accel_fraction;
+  const double fraction = config_.motion_model == EkfMotionModel::kConstantVelocity
+                              ? config_.cv_accel_fraction
+                              : config_.imm_cv_accel_fraction;
   const double sigma_a = fraction * config_.max_accel_mps2;
   return sigma_a * sigma_a * config_.maneuver_time_s;
 }
@@ -245,6 +248,22 @@ double Ekf::CvAccelPsd() const {
 double Ekf::CaJerkPsd() const {
   const double sigma_da = config_.imm_ca_jerk_fraction * config_.max_accel_mps2;
   return sigma_da * sigma_da / config_.maneuver_time_s;
+}
+
+double Ekf::CtAccelPsd() const {
+  const double sigma_a = config_.ct_accel_fraction * config_.max_accel_mps2;
+  return sigma_a * sigma_a * config_.maneuver_time_s;
+}
+
+double Ekf::CtTurnRatePsd() const {
+  const double sigma_dw =
+      config_.ct_turn_rate_fraction * config_.max_accel_mps2 / config_.max_speed_mps;
+  return sigma_dw * sigma_dw / config_.maneuver_time_s;
+}
+
+bool Ekf::HasMode(ModeKind kind) const {
+  return std::any_of(modes_.begin(), modes_.end(),
+                     [kind](const ModeModel& m) { return m.kind == kind; });
 }
 
 double Ekf::GateThreshold(int dof) const {
@@ -319,16 +338,16 @@ void Ekf::Observe(const std::string& node_id, const PositionFix& fix) {
   m.t_s = fix.t_s;
   const Vector3d z = fix.position_w;
   const Matrix3d R = fix.covariance_m2;
-  m.components.push_back([z, R](const Vector9d& x) { return LinearPosition(z, R, x); });
+  m.components.push_back([z, R](const Vector10d& x) { return LinearPosition(z, R, x); });
   const double v2 = config_.max_speed_mps * config_.max_speed_mps / 3.0;
   m.start = TrackStart{z, R, Vector3d::Zero(), v2 * Matrix3d::Identity()};
   Enqueue(node, std::move(m));
 }
 
-Ekf::Linearization Ekf::LinearPosition(const Vector3d& z, const Matrix3d& R, const Vector9d& x) {
+Ekf::Linearization Ekf::LinearPosition(const Vector3d& z, const Matrix3d& R, const Vector10d& x) {
   Linearization l;
   l.innovation = z - x.head<3>();
-  l.jacobian = MatrixXd::Zero(3, 9);
+  l.jacobian = MatrixXd::Zero(3, 10);
   l.jacobian.leftCols<3>().setIdentity();
   l.noise = R;
   return l;
@@ -341,7 +360,7 @@ Ekf::Measurement Ekf::PrepareLidar(const Node& node, const PointObservation& o) 
   if (!fix) return m;
   const Vector3d z = fix->position_w;
   const Matrix3d R = fix->covariance_m2;
-  m.components.push_back([z, R](const Vector9d& x) { return LinearPosition(z, R, x); });
+  m.components.push_back([z, R](const Vector10d& x) { return LinearPosition(z, R, x); });
   const double v2 = config_.max_speed_mps * config_.max_speed_mps / 3.0;
   m.start = TrackStart{z, R, Vector3d::Zero(), v2 * Matrix3d::Identity()};
   return m;
@@ -400,14 +419,14 @@ Ekf::Measurement Ekf::PrepareRadar(const Node& node, const PointObservation& o) 
     own(3, 3) = k * k * res.velocity_mps * res.velocity_mps / (2.0 * snr);
     const Eigen::Matrix4d R = own + common;
     const double v_max = res.max_velocity_mps;
-    m.components.push_back([z, R, s, R_WR, v_max](const Vector9d& x) {
+    m.components.push_back([z, R, s, R_WR, v_max](const Vector10d& x) {
       Linearization l;
       const Vector3d pp = x.head<3>(), vv = x.segment<3>(3);
       Eigen::Vector4d y = z - RadarMeasurement(pp, vv, s, R_WR);
       y(1) = std::remainder(y(1), 2.0 * kPi);
       y(3) = std::remainder(y(3), 2.0 * v_max);
       l.innovation = y;
-      l.jacobian = MatrixXd::Zero(4, 9);
+      l.jacobian = MatrixXd::Zero(4, 10);
       l.jacobian.leftCols<6>() = RadarJacobian(pp, vv, s, R_WR);
       l.noise = R;
       return l;
@@ -444,7 +463,7 @@ Ekf::Measurement Ekf::PrepareCamera(const Node& node, const CameraObservation& o
   model.centre_sigma_px = config_.camera_centre_sigma_px;
   model.disparity_sigma_px = config_.camera_disparity_sigma_px;
 
-  m.components.push_back([model](const Vector9d& x) {
+  m.components.push_back([model](const Vector10d& x) {
     const Vector3d p = x.head<3>();
     const Vector3d centre = 0.5 * (model.eye_left + model.eye_right);
     const auto [e1, e2] = NormalPair((p - centre).normalized());
@@ -452,7 +471,7 @@ Ekf::Measurement Ekf::PrepareCamera(const Node& node, const CameraObservation& o
     Et << e1.transpose(), e2.transpose();
     Linearization l;
     l.innovation = VectorXd(4);
-    l.jacobian = MatrixXd::Zero(4, 9);
+    l.jacobian = MatrixXd::Zero(4, 10);
     const Vector3d eyes[2] = {model.eye_left, model.eye_right};
     const Vector3d rays[2] = {model.ray_left, model.ray_right};
     for (int i = 0; i < 2; ++i) {
@@ -530,16 +549,22 @@ void Ekf::AdvanceHorizon(double t_s) {
 }
 
 void Ekf::Start(Track& track, const TrackStart& start, double t_s) const {
-  Imm9::Mode mode;
+  Imm10::Mode mode;
   mode.x.setZero();
   mode.x.head<3>() = start.position_m;
   mode.x.segment<3>(3) = start.velocity_mps;
   mode.P.setZero();
   mode.P.topLeftCorner<3, 3>() = start.position_cov;
   mode.P.block<3, 3>(3, 3) = start.velocity_cov;
-  mode.P.bottomRightCorner<3, 3>() =
+  mode.P.block<3, 3>(6, 6) =
       config_.max_accel_mps2 * config_.max_accel_mps2 / 3.0 * Matrix3d::Identity();
-  // The chain's stationary distribution: each mode in proportion to its sojourn.
+  // omega uniform over +-a_max / v_max, where a mode models it; else 0 +- 0.
+  if (HasMode(ModeKind::kCt)) {
+    const double omega_max = config_.max_accel_mps2 / config_.max_speed_mps;
+    mode.P(9, 9) = omega_max * omega_max / 3.0;
+  }
+  // The chain's stationary distribution: each mode in proportion to its
+  // sojourn.
   double total_s = 0.0;
   for (const ModeModel& mm : modes_) total_s += mm.sojourn_s;
   std::vector<double> mu;
@@ -555,18 +580,31 @@ void Ekf::Start(Track& track, const TrackStart& start, double t_s) const {
 
 namespace {
 
-void PredictMode(bool constant_acceleration, double q, double dt, Vector9d& x, Matrix9d& P) {
-  Matrix9d F = Matrix9d::Identity();
-  Matrix9d Q = Matrix9d::Zero();
+using Vector10d = Eigen::Matrix<double, 10, 1>;
+using Matrix10d = Eigen::Matrix<double, 10, 10>;
+
+// White acceleration of density q on [p, v] of every axis (CV, and CT's q_a).
+void AddWhiteAcceleration(double q, double dt, Matrix10d& Q) {
+  const double dt2 = dt * dt, dt3 = dt2 * dt;
+  for (int i = 0; i < 3; ++i) {
+    const int p = i, v = 3 + i;
+    Q(p, p) = q * dt3 / 3.0;
+    Q(p, v) = Q(v, p) = q * dt2 / 2.0;
+    Q(v, v) = q * dt;
+  }
+}
+
+// CV and CA: linear, per axis (header comment); omega carried unchanged.
+void PredictLinearMode(bool constant_acceleration, double q, double dt, Vector10d& x,
+                       Matrix10d& P) {
+  Matrix10d F = Matrix10d::Identity();
+  Matrix10d Q = Matrix10d::Zero();
   const double dt2 = dt * dt, dt3 = dt2 * dt;
   for (int i = 0; i < 3; ++i) {
     const int p = i, v = 3 + i, a = 6 + i;
     F(p, v) = dt;
     if (!constant_acceleration) {
       F(a, a) = 0.0;
-      Q(p, p) = q * dt3 / 3.0;
-      Q(p, v) = Q(v, p) = q * dt2 / 2.0;
-      Q(v, v) = q * dt;
     } else {
       F(p, a) = dt2 / 2.0;
       F(v, a) = dt;
@@ -578,7 +616,20 @@ void PredictMode(bool constant_acceleration, double q, double dt, Vector9d& x, M
       Q(a, a) = q * dt;
     }
   }
+  if (!constant_acceleration) AddWhiteAcceleration(q, dt, Q);
   x = F * x;
+  P = F * P * F.transpose() + Q;
+}
+
+// CT: Eq. 11.7.1-4 linearised at the mean; q_a on [p, v], q_w dt on omega.
+void PredictTurnMode(double q_a, double q_w, double dt, Vector10d& x, Matrix10d& P) {
+  Vector10d next;
+  Matrix10d F;
+  CoordinatedTurn(x, dt, next, F);
+  Matrix10d Q = Matrix10d::Zero();
+  AddWhiteAcceleration(q_a, dt, Q);
+  Q(9, 9) = q_w * dt;
+  x = next;
   P = F * P * F.transpose() + Q;
 }
 
@@ -599,22 +650,32 @@ void Ekf::Predict(Track& track, double t_s) const {
     // borrows that mode's acceleration statistics (Granstrom, Willett &
     // Bar-Shalom 2015, unequal-dimension mixing) instead of claiming a = 0
     // with certainty, which would shrink the CA mode's acceleration variance.
-    const auto source_of = [this](const std::vector<Imm9::Mode>& prior, std::size_t i,
+    // Likewise a mode without turn rate mixed into the CT mode borrows its
+    // omega.
+    const auto source_of = [this](const std::vector<Imm10::Mode>& prior, std::size_t i,
                                   std::size_t j) {
-      Imm9::Mode source = prior[i];
-      if (modes_[j].constant_acceleration && !modes_[i].constant_acceleration) {
-        source.x.tail<3>() = prior[j].x.tail<3>();
-        source.P.topRightCorner<6, 3>().setZero();
-        source.P.bottomLeftCorner<3, 6>().setZero();
-        source.P.bottomRightCorner<3, 3>() = prior[j].P.bottomRightCorner<3, 3>();
-      }
+      Imm10::Mode source = prior[i];
+      const auto borrow = [&](Eigen::Index first, Eigen::Index size) {
+        source.x.segment(first, size) = prior[j].x.segment(first, size);
+        source.P.middleRows(first, size).setZero();
+        source.P.middleCols(first, size).setZero();
+        source.P.block(first, first, size, size) = prior[j].P.block(first, first, size, size);
+      };
+      if (modes_[j].kind == ModeKind::kCa && modes_[i].kind != ModeKind::kCa) borrow(6, 3);
+      if (modes_[j].kind == ModeKind::kCt && modes_[i].kind != ModeKind::kCt) borrow(9, 1);
       return source;
     };
     track.imm.Mix((rates * dt).exp(), source_of);
   }
-  for (int j = 0; j < n; ++j)
-    PredictMode(modes_[j].constant_acceleration, modes_[j].psd, dt, track.imm.modes()[j].x,
-                track.imm.modes()[j].P);
+  for (int j = 0; j < n; ++j) {
+    const ModeModel& mm = modes_[static_cast<std::size_t>(j)];
+    Imm10::Mode& mode = track.imm.modes()[static_cast<std::size_t>(j)];
+    if (mm.kind == ModeKind::kCt) {
+      PredictTurnMode(mm.psd, mm.turn_psd, dt, mode.x, mode.P);
+    } else {
+      PredictLinearMode(mm.kind == ModeKind::kCa, mm.psd, dt, mode.x, mode.P);
+    }
+  }
   track.t_s = t_s;
 }
 
@@ -684,9 +745,9 @@ int Ekf::Update(Track& track_in, const Measurement& m, EkfNodeStats* stats) cons
   Track track = track_in;
   Predict(track, m.t_s);
 
-  const Imm9::Mode combined = track.imm.Combined();
-  const Vector9d& x_bar = combined.x;
-  const Matrix9d& P_bar = combined.P;
+  const Imm10::Mode combined = track.imm.Combined();
+  const Vector10d& x_bar = combined.x;
+  const Matrix10d& P_bar = combined.P;
 
   std::vector<std::size_t> accepted;
   for (std::size_t k = 0; k < m.components.size(); ++k) {
@@ -711,7 +772,7 @@ int Ekf::Update(Track& track_in, const Measurement& m, EkfNodeStats* stats) cons
 
   std::vector<double> log_likelihood(track.imm.size(), 0.0);
   for (std::size_t j = 0; j < track.imm.size(); ++j) {
-    Imm9::Mode& mode = track.imm.modes()[j];
+    Imm10::Mode& mode = track.imm.modes()[j];
     std::vector<Linearization> parts;
     int dim = 0;
     for (std::size_t k : accepted) {
@@ -719,7 +780,7 @@ int Ekf::Update(Track& track_in, const Measurement& m, EkfNodeStats* stats) cons
       dim += static_cast<int>(parts.back().innovation.size());
     }
     VectorXd y(dim);
-    MatrixXd H(dim, 9);
+    MatrixXd H(dim, 10);
     MatrixXd R = MatrixXd::Zero(dim, dim);
     for (std::size_t a = 0, row = 0; a < parts.size(); ++a) {
       const auto n = parts[a].innovation.size();
@@ -741,7 +802,7 @@ int Ekf::Update(Track& track_in, const Measurement& m, EkfNodeStats* stats) cons
     }
     const MatrixXd K = ldlt.solve(H * mode.P).transpose();  // P H^T S^-1 (S, P symmetric)
     mode.x += K * y;
-    const MatrixXd IKH = Matrix9d::Identity() - K * H;
+    const MatrixXd IKH = Matrix10d::Identity() - K * H;
     mode.P = IKH * mode.P * IKH.transpose() + K * R * K.transpose();  // Joseph form
     mode.P = 0.5 * (mode.P + mode.P.transpose()).eval();
     log_likelihood[j] = -0.5 * (y.dot(ldlt.solve(y)) + ldlt.vectorD().array().log().sum() +
@@ -755,9 +816,9 @@ int Ekf::Update(Track& track_in, const Measurement& m, EkfNodeStats* stats) cons
 }
 
 EkfEstimate Ekf::Combine(const Track& track, double t_s) const {
-  const Imm9::Mode combined = track.imm.Combined();
-  const Vector9d& x = combined.x;
-  const Matrix9d& P = combined.P;
+  const Imm10::Mode combined = track.imm.Combined();
+  const Vector10d& x = combined.x;
+  const Matrix10d& P = combined.P;
   EkfEstimate e;
   e.t_s = t_s;
   e.position_m = x.head<3>();
@@ -784,10 +845,17 @@ std::optional<EkfEstimate> Ekf::StateAt(double t_s) {
     // Backwards: the means only, along each mode's own motion.
     const double dt = t_eff - track.t_s;
     for (std::size_t j = 0; j < track.imm.size(); ++j) {
-      Vector9d& x = track.imm.modes()[j].x;
-      const bool ca = modes_[j].constant_acceleration;
-      x.head<3>() += dt * x.segment<3>(3) + (ca ? 0.5 * dt * dt : 0.0) * x.tail<3>();
-      if (ca) x.segment<3>(3) += dt * x.tail<3>();
+      Vector10d& x = track.imm.modes()[j].x;
+      if (modes_[j].kind == ModeKind::kCt) {  // back along the circle
+        Vector10d back;
+        Matrix10d unused;
+        CoordinatedTurn(x, dt, back, unused);
+        x = back;
+        continue;
+      }
+      const bool ca = modes_[j].kind == ModeKind::kCa;
+      x.head<3>() += dt * x.segment<3>(3) + (ca ? 0.5 * dt * dt : 0.0) * x.segment<3>(6);
+      if (ca) x.segment<3>(3) += dt * x.segment<3>(6);
     }
   }
   return Combine(track, t_s);

@@ -10,7 +10,10 @@ using core::Rule;
 template <class V>
 void Visit(V& v, EkfConfig& c) {
   v.Enum("motion_model", c.motion_model,
-         {{"cv", EkfMotionModel::kConstantVelocity}, {"imm", EkfMotionModel::kImm}});
+         {{"cv", EkfMotionModel::kConstantVelocity},
+          {"imm", EkfMotionModel::kImm},
+          {"imm_ct", EkfMotionModel::kImmCt},
+          {"imm_ca_ct", EkfMotionModel::kImmCaCt}});
   // max_speed_mps, max_accel_mps2 and target_size_m are not keys: the engine
   // takes them from uavs[0] (its trajectory limits and size_m).
   v("maneuver_time_s", c.maneuver_time_s, Rule::Range(0.01, 100.0));
@@ -19,6 +22,9 @@ void Visit(V& v, EkfConfig& c) {
   v("imm_ca_jerk_fraction", c.imm_ca_jerk_fraction, Rule::Range(1e-4, 10.0));
   v("imm_cv_sojourn_s", c.imm_cv_sojourn_s, Rule::Range(0.01, 1e4));
   v("imm_ca_sojourn_s", c.imm_ca_sojourn_s, Rule::Range(0.01, 1e4));
+  v("ct_accel_fraction", c.ct_accel_fraction, Rule::Range(1e-4, 10.0));
+  v("ct_turn_rate_fraction", c.ct_turn_rate_fraction, Rule::Range(1e-4, 10.0));
+  v("imm_ct_sojourn_s", c.imm_ct_sojourn_s, Rule::Range(0.01, 1e4));
   v("gate_probability", c.gate_probability, Rule{0.5, 1.0, false, true});
   v("max_gap_s", c.max_gap_s, Rule::Positive(1e4));
   v("ranging_timeout_s", c.ranging_timeout_s, Rule::Positive(1e4));

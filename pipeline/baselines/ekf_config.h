@@ -11,12 +11,18 @@
 namespace uavsim::pipeline {
 
 enum class EkfMotionModel {
-  kConstantVelocity,  // "cv": one constant-velocity model, white-noise acceleration
-  kImm,  // "imm": interacting multiple models, constant velocity + constant acceleration
+  kConstantVelocity,  // "cv": one constant-velocity model, white-noise
+                      // acceleration
+  kImm,               // "imm": interacting multiple models, constant velocity + constant
+                      // acceleration
+  kImmCt,             // "imm_ct": constant velocity + coordinated turn (the anchor filter's
+                      // pair)
+  kImmCaCt,           // "imm_ca_ct": constant velocity + constant acceleration +
+                      // coordinated turn
 };
 
 struct EkfConfig {
-  EkfMotionModel motion_model = EkfMotionModel::kImm;
+  EkfMotionModel motion_model = EkfMotionModel::kImmCaCt;
 
   // The target: its trajectory's limits and its size. Not scenario keys: the
   // engine copies uavs[0].trajectory.max_speed_mps, max_accel_mps2 and
@@ -39,6 +45,18 @@ struct EkfConfig {
   double imm_ca_jerk_fraction = 0.1;
   double imm_cv_sojourn_s = 2.0;
   double imm_ca_sojourn_s = 3.0;
+  // The coordinated-turn mode ("imm_ct", "imm_ca_ct"; ekf.h, "Motion
+  // models"): white acceleration on [p, v] per axis of spectral density
+  // (ct_accel_fraction a_max)^2 maneuver_time_s (m^2/s^3), and a turn rate
+  // omega (rad/s) that drifts by ct_turn_rate_fraction a_max / v_max (the
+  // rate of a full-acceleration turn at full speed) within maneuver_time_s:
+  // q_w = (ct_turn_rate_fraction a_max / v_max)^2 / maneuver_time_s
+  // (rad^2/s^3); mean time (s) spent in the mode before switching. The CV
+  // mode of every IMM uses imm_cv_accel_fraction and imm_cv_sojourn_s.
+  // The defaults: "[tuning]", "coordinated-turn noise sweep" (ekf.h).
+  double ct_accel_fraction = 0.01;
+  double ct_turn_rate_fraction = 0.02;
+  double imm_ct_sojourn_s = 3.0;
 
   // Gating and track management.
   double gate_probability = 0.99;  // chi-square gate per measurement component
