@@ -77,30 +77,6 @@ std::unique_ptr<pipeline::UavLocModelFiles> LoadModel(const Scenario& s, const s
   return model;
 }
 
-// The EKF baseline with noises from the nodes' sensor configurations and the
-// target's limits.
-std::unique_ptr<pipeline::Ekf> MakeEkf(const Scenario& s) {
-  pipeline::EkfConfig config = s.pipeline.ekf;
-  config.max_speed_mps = s.uavs.front().trajectory.max_speed_mps;
-  config.max_accel_mps2 = s.uavs.front().trajectory.max_accel_mps2;
-  config.target_size_m = s.uavs.front().size_m;
-  auto ekf = std::make_unique<pipeline::Ekf>(config);
-  for (const NodeConfig& n : s.nodes) {
-    switch (n.sensor.type) {
-      case sensors::SensorType::kFisheyeStereo:
-        ekf->AddCamera(n.id, n.sensor.fisheye);
-        break;
-      case sensors::SensorType::kLidar:
-        ekf->AddLidar(n.id, n.sensor.lidar);
-        break;
-      case sensors::SensorType::kFmcwRadar:
-        ekf->AddRadar(n.id, n.sensor.radar);
-        break;
-    }
-  }
-  return ekf;
-}
-
 // Whether a method runs the paper's head (uavloc and its single-modality
 // ablations) or the anchored one.
 bool NeedsPaperHead(const std::string& method) {
@@ -127,6 +103,28 @@ void RequireHeads(const Scenario& s, const std::string& file, const std::string&
 }
 
 }  // namespace
+
+std::unique_ptr<pipeline::Ekf> MakeEkf(const Scenario& s) {
+  pipeline::EkfConfig config = s.pipeline.ekf;
+  config.max_speed_mps = s.uavs.front().trajectory.max_speed_mps;
+  config.max_accel_mps2 = s.uavs.front().trajectory.max_accel_mps2;
+  config.target_size_m = s.uavs.front().size_m;
+  auto ekf = std::make_unique<pipeline::Ekf>(config);
+  for (const NodeConfig& n : s.nodes) {
+    switch (n.sensor.type) {
+      case sensors::SensorType::kFisheyeStereo:
+        ekf->AddCamera(n.id, n.sensor.fisheye);
+        break;
+      case sensors::SensorType::kLidar:
+        ekf->AddLidar(n.id, n.sensor.lidar);
+        break;
+      case sensors::SensorType::kFmcwRadar:
+        ekf->AddRadar(n.id, n.sensor.radar);
+        break;
+    }
+  }
+  return ekf;
+}
 
 bool NeedsTrainedModel(const Scenario& s) {
   const auto& m = s.pipeline.methods;

@@ -59,6 +59,10 @@ bool NeedsTrainedModel(const Scenario& s);
 // core::ConfigError naming `file` and the scenario's pointer.
 void CheckTrainedModel(const Scenario& s, const std::string& file);
 
+// The `ekf` method as a run builds it: the scenario's EkfConfig with the
+// target's limits and size, every node's sensor added under its id.
+std::unique_ptr<pipeline::Ekf> MakeEkf(const Scenario& s);
+
 class EdgeServer {
  public:
   // Builds the scenario's methods. With `methods` false (training-data

@@ -17,6 +17,7 @@
 #include "sim/core/progress.h"
 #include "sim/core/rng.h"
 #include "sim/core/trajectory.h"
+#include "sim/held_out_scores.h"
 #include "sim/process_farm.h"
 #include "sim/run.h"
 
@@ -349,6 +350,9 @@ std::optional<pipeline::TrainReport> RunTraining(const Scenario& base, const Tra
   t.latent_dim = base.pipeline.latent_dim;
   t.window_s = base.pipeline.window_s;
   if (c.mlp_bottleneck) t.bottleneck = pipeline::IbBottleneck::kMlp;
+  t.score_classical = [&base](const std::vector<pipeline::Episode>& episodes) {
+    return ScoreClassicalMethods(base, episodes);
+  };
   t.paper_head = c.paper_head;
   t.anchored_head = c.anchored_head;
   if (c.episodes > 0) plan.episodes = c.episodes;

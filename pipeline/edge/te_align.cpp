@@ -67,7 +67,9 @@ double TeAlign::Tau(double t_s, std::int64_t k) const {
   // From integer nanoseconds, so the offset is exact to the clock's tick and
   // never a rounding error of a large absolute time.
   const std::int64_t t_ns = std::llround(t_s * kNsPerS);
-  const std::int64_t offset_ns = t_ns - (k - 1) * window_ns_;
+  const std::int64_t origin_ns =
+      config_.tau_origin == TauOrigin::kWindow ? (k - 1) * window_ns_ : 0;
+  const std::int64_t offset_ns = t_ns - origin_ns;
   return static_cast<double>(offset_ns) / kNsPerS / config_.time_unit_s;
 }
 

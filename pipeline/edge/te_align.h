@@ -14,6 +14,13 @@
 
 namespace uavsim::pipeline {
 
+// Where τ_i^m of Eq. (19) is measured from.
+enum class TauOrigin {
+  kWindow,  // the start of the frame's window (ours, the default)
+  kClock,   // the simulated clock's zero, the run's (an episode's) start: the
+            // paper's "timestamp of the i-th data frame"
+};
+
 struct TeAlignConfig {
   int latent_dim = 16;     // z^m, the same for every modality; even (paper: 4 ... 64)
   double window_s = 0.2;   // t^w (paper Sec. VI)
@@ -24,6 +31,10 @@ struct TeAlignConfig {
   // (its fastest channel has a period of 20 s at z = 16), while the offset in
   // milliseconds spans the window as transformer positions span a sequence.
   double time_unit_s = 1e-3;
+  // The paper's τ is the frame's time stamp (kClock); ours its offset into the
+  // window (kWindow), so a window's encoding does not depend on how long the
+  // run has gone (measured: README, "The paper's design and ours").
+  TauOrigin tau_origin = TauOrigin::kWindow;
 
   // Throws std::invalid_argument naming the field, its value and the rule.
   void Validate() const;
@@ -66,7 +77,8 @@ class TeAlign {
   std::int64_t WindowOf(double t_s) const;
   double WindowStart_s(std::int64_t k) const;  // (k-1) t^w
 
-  // τ of a frame stamped t_s in window k, in units of time_unit_s.
+  // τ of a frame stamped t_s in window k, in units of time_unit_s: from the
+  // window's start or from the clock's zero (tau_origin).
   double Tau(double t_s, std::int64_t k) const;
 
   // Eq. (19): E^m_i = [sin(τ/κ^{2j/z}), cos(τ/κ^{2j/z})]_{j=1..z/2}.

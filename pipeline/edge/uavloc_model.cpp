@@ -28,6 +28,9 @@ void Visit(V& v, UavLocModelConfig& c) {
   v("window_s", c.window_s, Rule::Range(1e-9, 3600.0));
   v("kappa", c.kappa, Rule{1.0, std::numeric_limits<double>::infinity(), true, false});
   v("time_unit_s", c.time_unit_s, Rule::Positive());
+  v.Enum("tau_origin", c.tau_origin,
+         std::vector<std::pair<const char*, TauOrigin>>{{"window", TauOrigin::kWindow},
+                                                        {"clock", TauOrigin::kClock}});
   v("score_hidden", c.score_hidden, Rule::Range(1, 65536));
   v("lambda_init", c.lambda_init);
   v("d_model", c.d_model, Rule::Range(1, 65536));
@@ -56,6 +59,7 @@ TeAlignConfig UavLocModelConfig::te_align() const {
   t.window_s = window_s;
   t.kappa = kappa;
   t.time_unit_s = time_unit_s;
+  t.tau_origin = tau_origin;
   return t;
 }
 

@@ -41,6 +41,7 @@ struct UavLocModelConfig {
   double window_s = 0.2;
   double kappa = 10000.0;
   double time_unit_s = 1e-3;
+  TauOrigin tau_origin = TauOrigin::kWindow;  // absent from older sidecars: kWindow
   // MADW and MICA (Table I: MLP_128; paper Sec. VI: λ initialised to 0.5).
   int score_hidden = 128;
   double lambda_init = 0.5;

@@ -61,6 +61,11 @@ enum class DataSplit {
 };
 const char* DataSplitName(DataSplit s);  // "trajectory", "frame"
 
+// The weather an episode was simulated in, from its label (sim/train.cpp
+// writes ", rain N mm/h" and ", fog N m"): "clear", "rain", "fog" or
+// "rain+fog".
+std::string WeatherOf(const Episode& e);
+
 struct Dataset {
   std::vector<Episode> train, validation, test;
   DataSplit split = DataSplit::kTrajectory;

@@ -167,6 +167,12 @@ void WriteEpisodes(const std::vector<Episode>& episodes, const std::string& path
 
 const char* DataSplitName(DataSplit s) { return s == DataSplit::kFrame ? "frame" : "trajectory"; }
 
+std::string WeatherOf(const Episode& e) {
+  const bool rain = e.label.find(", rain ") != std::string::npos;
+  const bool fog = e.label.find(", fog ") != std::string::npos;
+  return rain && fog ? "rain+fog" : rain ? "rain" : fog ? "fog" : "clear";
+}
+
 std::vector<Episode> ReadEpisodes(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::runtime_error(path + ": cannot open");

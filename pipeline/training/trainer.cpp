@@ -553,12 +553,13 @@ Evaluation Evaluate(UavLocModel& model, const std::vector<WindowSequence>& seque
   model->eval();
   Evaluation ev;
   const double scale = model->config().position_scale_m;
-  for (int subset = -1; subset < kModalityCount; ++subset) {
-    const std::string key = subset < 0 ? "all" : kPartNames[subset];
+  for (int bits = 1; bits <= kModalitySubsets; ++bits) {
+    const std::string key = ModalitySubsetName(bits);
     double sum = 0.0, count = 0.0;
     for (const WindowSequence& s : sequences) {
-      torch::Tensor keep = torch::ones({1, kModalityCount});
-      if (subset >= 0) keep.zero_(), keep[0][subset] = 1.0;
+      torch::Tensor keep = torch::zeros({1, kModalityCount});
+      for (int m = 0; m < kModalityCount; ++m)
+        if (bits & (1 << m)) keep[0][m] = 1.0;
       const torch::Tensor mask = (s.mask * keep).unsqueeze(0);
       const torch::Tensor y_hat = ForwardSequence(model, s, mask[0]);
       const torch::Tensor w = CountedWindows(mask, s.scored.unsqueeze(0));
@@ -592,6 +593,17 @@ core::Json EvaluationJson(const Evaluation& ev) {
 }
 
 }  // namespace
+
+std::string ModalitySubsetName(int bits) {
+  if (bits < 1 || bits > kModalitySubsets)
+    throw std::invalid_argument("ModalitySubsetName: bits " + std::to_string(bits) +
+                                " is not in [1, 7]");
+  if (bits == kModalitySubsets) return "all";
+  std::string name;
+  for (int m = 0; m < kModalityCount; ++m)
+    if (bits & (1 << m)) name += (name.empty() ? "" : "+") + std::string(kPartNames[m]);
+  return name;
+}
 
 void TrainOptions::Validate() const {
   try {
@@ -644,6 +656,7 @@ TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& o, const ModelM
   config.d_model = o.d_model;
   config.layers = o.layers;
   config.lambda_init = o.mica_lambda_init;
+  config.tau_origin = o.te_align_tau_origin;
   config.position_centre_m = norm.centre_m;
   config.position_scale_m = norm.scale_m;
   const TeAlign align(config.te_align());
@@ -652,6 +665,27 @@ TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& o, const ModelM
   const std::vector<WindowSequence> test = data.test.empty()
                                                ? std::vector<WindowSequence>{}
                                                : AlignAll(data.test, encoders, align, norm);
+
+  // The test episodes by weather (AlignAll keeps the episodes with windows,
+  // in order), and the classical methods on them.
+  std::map<std::string, std::vector<std::size_t>> test_weather;
+  std::map<std::string, std::vector<Episode>> test_weather_episodes;
+  {
+    std::size_t i = 0;
+    for (const Episode& e : data.test)
+      if (!e.window_truth.empty()) {
+        test_weather[WeatherOf(e)].push_back(i++);
+        test_weather_episodes[WeatherOf(e)].push_back(e);
+      }
+  }
+  for (const auto& [weather, episodes] : test_weather_episodes)
+    report.test_weather_episodes[weather] = episodes.size();
+  if (o.score_classical && !test.empty()) {
+    for (auto& [method, ev] : o.score_classical(data.test)) report.test[method] = std::move(ev);
+    for (const auto& [weather, episodes] : test_weather_episodes)
+      for (auto& [method, ev] : o.score_classical(episodes))
+        report.test_by_weather[method][weather] = std::move(ev);
+  }
 
   ModelManifest m = manifest;
   m.latent_dim = o.latent_dim;
@@ -676,7 +710,15 @@ TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& o, const ModelM
     StageReport stage;
     UavLocModel model = TrainFusion(train, val, head, o, (checkpoints / file).string(), stage);
     report.stages.push_back(stage);
-    if (!test.empty()) report.test[anchored ? "uavloc_anchored" : "uavloc"] = Evaluate(model, test);
+    if (!test.empty()) {
+      const std::string method = anchored ? "uavloc_anchored" : "uavloc";
+      report.test[method] = Evaluate(model, test);
+      for (const auto& [weather, indices] : test_weather) {
+        std::vector<WindowSequence> part;
+        for (std::size_t i : indices) part.push_back(test[i]);
+        report.test_by_weather[method][weather] = Evaluate(model, part);
+      }
+    }
     SaveUavLocModel(model, (out / file).string());
   }
 
@@ -756,6 +798,13 @@ std::string ReportJson(const TrainReport& r, const TrainOptions& o) {
   core::Json test = core::Json::object();
   for (const auto& [method, ev] : r.test) test[method] = EvaluationJson(ev);
   j["test"] = test;
+  core::Json by_weather = core::Json::object();
+  for (const auto& [method, weathers] : r.test_by_weather)
+    for (const auto& [weather, ev] : weathers) by_weather[method][weather] = EvaluationJson(ev);
+  j["test_by_weather"] = by_weather;
+  core::Json weather_episodes = core::Json::object();
+  for (const auto& [weather, n] : r.test_weather_episodes) weather_episodes[weather] = n;
+  j["test_weather_episodes"] = weather_episodes;
   return j.dump(2) + "\n";
 }
 

@@ -29,6 +29,23 @@
 
 namespace uavsim::pipeline {
 
+// RMSE in metres of a method over whole episodes (from window 1, as in a
+// run), counting the windows from the first one in which an allowed modality
+// arrived, and only the scored ones (Episode::scored_windows); a method that
+// may not answer (the classical ones) counts only the windows it answers.
+// Keys, the seven modality subsets (the others masked as missing): "all"
+// (camera, LiDAR and radar), "camera+lidar", "camera+radar", "lidar+radar",
+// "camera", "lidar", "radar".
+struct Evaluation {
+  std::map<std::string, double> rmse_m;
+  std::map<std::string, std::size_t> windows;
+};
+
+// The subset of modalities `bits` allows (bit m: Modality m), 1..7, as named
+// in Evaluation.
+std::string ModalitySubsetName(int bits);
+inline constexpr int kModalitySubsets = 7;
+
 // What one training run needs: the tuning knobs (TrainingConfig, data read
 // from a config file) and what the caller decides per run.
 struct TrainOptions : TrainingConfig {
@@ -46,6 +63,10 @@ struct TrainOptions : TrainingConfig {
   // Called before every optimisation step; may throw to stop training
   // (the CLI's Ctrl-C). Empty: never stops.
   std::function<void()> check_stop;
+  // Scores methods that need no training (the caller's classical ones: the
+  // trainer knows no sensors) on held-out episodes, by method name, under
+  // Evaluation's rules; the report puts them beside the heads. Empty: none.
+  std::function<std::map<std::string, Evaluation>(const std::vector<Episode>&)> score_classical;
 
   // Throws std::invalid_argument naming the first bad field: the
   // TrainingConfig rules (training_config.h), then latent_dim (even, >= 2),
@@ -65,22 +86,18 @@ struct StageReport {
   double seconds = 0.0;
 };
 
-// RMSE in metres of the edge network over whole episodes (from window 1, as
-// in a run), counting the windows from the first one in which an allowed
-// modality arrived, and only the scored ones (Episode::scored_windows). Keys: "all" (every modality
-// that arrived), "camera", "lidar", "radar" (only that one; the others masked as missing).
-struct Evaluation {
-  std::map<std::string, double> rmse_m;
-  std::map<std::string, std::size_t> windows;
-};
-
 struct TrainReport {
   DataSplit split = DataSplit::kTrajectory;  // the Dataset's
   std::vector<StageReport> stages;
   std::vector<Eigen::Vector3d> candidate_offset_m;  // empty: not calibrated
-  // On the held-out test split, per head trained, by its method's name
-  // ("uavloc", "uavloc_anchored").
+  // On the held-out test split, by method name: each head trained
+  // ("uavloc", "uavloc_anchored") and the classical methods the caller
+  // scored (TrainOptions::score_classical).
   std::map<std::string, Evaluation> test;
+  // The same per weather of the test episodes (WeatherOf): method ->
+  // weather -> scores; and how many test episodes each weather has.
+  std::map<std::string, std::map<std::string, Evaluation>> test_by_weather;
+  std::map<std::string, std::size_t> test_weather_episodes;
 };
 
 // Trains on `data` and writes the model folder `out_dir` (model.json from

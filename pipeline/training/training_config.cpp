@@ -33,6 +33,9 @@ void Visit(V& v, TrainingConfig& c) {
   v("d_model", c.d_model, Rule::Range(1, 4096));
   v("layers", c.layers, Rule::Range(1, 64));
   v("mica_lambda_init", c.mica_lambda_init, Rule::Range(-1e3, 1e3));
+  v.Enum("te_align_tau_origin", c.te_align_tau_origin,
+         std::vector<std::pair<const char*, TauOrigin>>{{"window", TauOrigin::kWindow},
+                                                        {"clock", TauOrigin::kClock}});
   v.Enum("camera_stereo_branches", c.camera_stereo_branches,
          std::vector<std::pair<const char*, StereoBranches>>{{"shared", StereoBranches::kShared},
                                                              {"two", StereoBranches::kTwo}});

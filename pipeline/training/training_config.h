@@ -14,6 +14,7 @@
 #include <cstddef>
 #include <string>
 
+#include "pipeline/edge/te_align.h"
 #include "pipeline/node/ib_cc_config.h"
 #include "sim/core/json_io.h"
 
@@ -58,6 +59,9 @@ struct TrainingConfig {
   int layers = 2;
   // MICA's λ^{m,n} at the start (paper Sec. VI: 0.5).
   double mica_lambda_init = 0.5;
+  // TE-Align's τ from the window's start (ours) or the episode's clock (the
+  // paper's time stamp): TeAlignConfig::tau_origin.
+  TauOrigin te_align_tau_origin = TauOrigin::kWindow;
   // The camera's feature encoder (IbCcConfig, pipeline/node/ib_cc_config.h):
   // the paper's two parallel stereo branches or one shared CNN; the average
   // pool of each eye's map (0: none, the paper's); the ROI geometry

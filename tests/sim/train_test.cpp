@@ -87,6 +87,22 @@ TEST_CASE("CLI: train --quick learns, is deterministic, and its model runs in th
   }
   for (const char* method : {"uavloc", "uavloc_anchored"})
     CHECK(report["test"][method]["all"]["rmse_m"].is_number());
+  // The classical methods on the same held-out flights, every modality
+  // subset, never on more windows than the heads (they answer once a track
+  // is confirmed); and every method per weather of the test flights (three
+  // of them: --quick's episodes are dry).
+  for (const char* method : {"ekf", "anchor_track"}) {
+    INFO(method);
+    REQUIRE(report["test"].contains(method));
+    CHECK(report["test"][method].size() == 7);
+    CHECK(report["test"][method]["all"]["windows"].get<int>() > 0);
+    CHECK(report["test"][method]["all"]["windows"].get<int>() <=
+          report["test"]["uavloc"]["all"]["windows"].get<int>());
+  }
+  CHECK(report["test_weather_episodes"] == Json({{"clear", 3}}));
+  for (const char* method : {"uavloc", "uavloc_anchored", "ekf", "anchor_track"})
+    CHECK(report["test_by_weather"][method]["clear"]["all"]["windows"] ==
+          report["test"][method]["all"]["windows"]);
   CHECK(Stage(report, "camera")["best_validation_loss"].get<double>() <
         Stage(report, "camera")["initial_validation_loss"].get<double>());
   const Json manifest = Json::parse(ReadFile(model + "/model.json"));

@@ -621,6 +621,18 @@ TEST_CASE("UavLocModel: save and load round trip, with the JSON sidecar", "[pipe
   testing::WriteFile(SidecarPath(path), "{\"format\": \"uavloc-model/1\", \"d_modle\": 3}");
   CHECK_THROWS_WITH(LoadUavLocModel(path), Catch::Contains("d_modle"));
   CHECK_THROWS_AS(LoadUavLocModel(dir + "/missing.pt"), core::ConfigError);
+
+  // TE-Align's tau origin: written, read back, and a sidecar from before the
+  // key existed (none written) loads with the window origin it was trained on.
+  UavLocModelConfig clock = config;
+  clock.tau_origin = TauOrigin::kClock;
+  SaveUavLocModel(UavLocModel(clock), path);
+  CHECK_THAT(testing::ReadFile(SidecarPath(path)), Catch::Contains("\"tau_origin\": \"clock\""));
+  CHECK(LoadUavLocModel(path)->config().tau_origin == TauOrigin::kClock);
+  core::Json old = core::Json::parse(testing::ReadFile(SidecarPath(path)));
+  old.erase("tau_origin");
+  testing::WriteFile(SidecarPath(path), old.dump(2));
+  CHECK(LoadUavLocModel(path)->config().tau_origin == TauOrigin::kWindow);
 }
 
 TEST_CASE("UavLocModel anchored: save and load round trip keeps anchored", "[pipeline]") {

@@ -43,6 +43,29 @@ TEST_CASE("TeAlign: tau is the offset into the window in time units", "[pipeline
   CHECK(align.Tau(1000.1999, 5001) == Approx(199.9).margin(1e-6));
 }
 
+TEST_CASE("TeAlign: with the clock origin tau is the frame's time stamp (paper Eq. 19)",
+          "[pipeline]") {
+  TeAlignConfig config = Config(16);
+  config.tau_origin = TauOrigin::kClock;
+  const TeAlign align(config);
+  CHECK(align.Tau(0.4, 3) == Approx(400.0).margin(1e-9));
+  CHECK(align.Tau(0.433, 3) == Approx(433.0).margin(1e-9));
+  CHECK(align.Tau(1000.1999, 5001) == Approx(1000199.9).margin(1e-6));
+  // Align adds E(t_s / unit) to the latent: two frames of one window, pooled.
+  WindowInputs in;
+  in.window = 3;
+  in.frames[0].push_back({0.41, std::vector<float>(16, 1.0f), {}});
+  in.frames[0].push_back({0.47, std::vector<float>(16, -1.0f), {}});
+  const AlignedWindow out = align.Align(in);
+  for (int j = 1; j <= 8; ++j) {
+    const double w = 1.0 / std::pow(10000.0, 2.0 * j / 16);
+    CHECK(out.latent[0][2 * (j - 1)] ==
+          Approx((std::sin(410.0 * w) + std::sin(470.0 * w)) / 2).margin(1e-6));
+    CHECK(out.latent[0][2 * (j - 1) + 1] ==
+          Approx((std::cos(410.0 * w) + std::cos(470.0 * w)) / 2).margin(1e-6));
+  }
+}
+
 TEST_CASE("TeAlign: window k holds (k-1) t^w <= t < k t^w", "[pipeline]") {
   const TeAlign align(Config(16));
   CHECK(align.WindowOf(0.0) == 1);

@@ -410,7 +410,9 @@ TEST_CASE("Trainer: EvaluateModel scores the saved model on held-out episodes",
   for (const char* method : {"uavloc", "uavloc_anchored"}) {
     const Evaluation& ev = evaluations.at(method);
     const Evaluation& trained = t.report.test.at(method);
-    for (const char* key : {"all", "camera", "lidar", "radar"}) {
+    REQUIRE(ev.rmse_m.size() == 7);  // every modality subset
+    for (const char* key :
+         {"all", "camera+lidar", "camera+radar", "lidar+radar", "camera", "lidar", "radar"}) {
       INFO(method << " " << key);
       REQUIRE(ev.rmse_m.count(key) == 1);
       REQUIRE(ev.windows.count(key) == 1);
@@ -425,6 +427,10 @@ TEST_CASE("Trainer: EvaluateModel scores the saved model on held-out episodes",
     }
     // Every modality is seen in the first window.
     CHECK(ev.windows.at("all") == static_cast<std::size_t>(kWindows));
+    // A subset counts from its first arrival: a larger one no later.
+    CHECK(ev.windows.at("camera+lidar") >= ev.windows.at("camera"));
+    CHECK(ev.windows.at("camera+lidar") >= ev.windows.at("lidar"));
+    CHECK(ev.windows.at("lidar+radar") >= ev.windows.at("radar"));
   }
 
   // Through the manifest's path too; and an episode that saw nothing has no

@@ -46,6 +46,7 @@ TrainingConfig AllChanged() {
   c.d_model = 32;
   c.layers = 3;
   c.mica_lambda_init = 0.25;
+  c.te_align_tau_origin = TauOrigin::kClock;
   c.camera_stereo_branches = StereoBranches::kTwo;
   c.camera_eye_pool_side = 8;
   c.camera_roi_geometry = false;
@@ -162,6 +163,8 @@ TEST_CASE("TrainingConfig: the paper's preset sets what Sec. VI and Sec. IV-B gi
   CHECK(paper.beta == 1e-3);
   CHECK(paper.mica_lambda_init == 0.5);
   CHECK(paper.dropout == 0.1);
+  // Sec. V-A, Eq. (19): tau is the frame's time stamp.
+  CHECK(paper.te_align_tau_origin == TauOrigin::kClock);
   // Sec. IV-B: two parallel CNN branches; Table III's count: no pool, and
   // the crop alone.
   CHECK(paper.camera_stereo_branches == StereoBranches::kTwo);
