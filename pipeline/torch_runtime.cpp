@@ -26,6 +26,16 @@ void InitTorch(int threads, std::uint64_t seed) {
     // touched) serves them from the heap: camera stage 1 ~19x faster,
     // results bit-identical (BENCHMARKS.md). A MALLOC_TOP_PAD_ the user set wins.
     if (!std::getenv("MALLOC_TOP_PAD_")) mallopt(M_TOP_PAD, kMallocTopPad_bytes);
+    // Blocks above glibc's mmap threshold (at most 32 MB) bypass the heap:
+    // each is a fresh mmap, zero-faulted page by page, and unmapped when
+    // freed, at every step. The paper's unpooled camera encoder has 64 MB
+    // weights (and gradients, Adam temporaries), and encoding episodes for
+    // stage 2 allocates batches of crops: a --quick training spent 2.75 M
+    // page faults and two thirds of its wall time there. Serving every
+    // block from the heap: 57 -> 20 s (2 epochs a stage), the paper
+    // preset's camera epoch 29 -> 12 s, results bit-identical
+    // (BENCHMARKS.md). A MALLOC_MMAP_MAX_ the user set wins.
+    if (!std::getenv("MALLOC_MMAP_MAX_")) mallopt(M_MMAP_MAX, 0);
     // Must be in the environment before OpenMP starts its pool.
     setenv("OMP_WAIT_POLICY", "PASSIVE", /*overwrite=*/0);
     at::set_num_threads(threads < 1 ? 1 : threads);
