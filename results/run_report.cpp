@@ -117,7 +117,7 @@ struct Estimate {
 struct RunData {
   fs::path dir;
   Json manifest, metrics, scenario;
-  std::optional<Table> truth, estimates, packets, world_top, layout, rate_snr;
+  std::optional<Table> truth, estimates, packets, world_top, layout, rate_snr, rate_snr_common;
   std::vector<std::string> methods;  // in order of first appearance
   std::map<std::string, std::vector<Estimate>> estimated;
   std::vector<double> truth_t;
@@ -150,6 +150,7 @@ RunData Load(const std::string& dir) {
   d.world_top = ReadTable(d.dir, "world_top.csv");
   d.layout = ReadTable(d.dir, "layout.csv");
   d.rate_snr = ReadTable(d.dir, "rate_snr.csv");
+  d.rate_snr_common = ReadTable(d.dir, "rate_snr_common.csv");
   if (d.truth) {
     const long t = d.truth->Column("t_s"), x = d.truth->Column("x_m"), y = d.truth->Column("y_m"),
                z = d.truth->Column("z_m");
@@ -652,13 +653,24 @@ Figure LatencyFigure(const RunData& d, const Packets& p, CsvTable* csv, const Ru
   return Draw(d, o, png, caption, gp.str(), 640, 440, warnings);
 }
 
-Figure RateSnr(const RunData& d, const RunReportOptions& o, std::vector<std::string>* warnings) {
-  const std::string png = "rate_snr.png";
+// rate_snr.png from rate_snr.csv (every window; a method without an
+// estimate yet scores gain 0) or, `common`, rate_snr_common.png from
+// rate_snr_common.csv (the windows every steering method estimated).
+Figure RateSnr(const RunData& d, bool common, const RunReportOptions& o,
+               std::vector<std::string>* warnings) {
+  const std::string stem = common ? "rate_snr_common" : "rate_snr";
+  const std::string png = stem + ".png";
   const std::string caption =
-      "Achievable downlink rate vs SNR with the base station's beam steered at the truth "
-      "(perfect) and at each method's estimate.";
-  if (!d.rate_snr) return NotDrawn(png, caption, "the run has no rate_snr.csv", warnings);
-  const Table& t = *d.rate_snr;
+      common ? "The same over the " +
+                   JsonText(d.metrics.value("rate_snr_common_windows", Json(nullptr))) +
+                   " windows in which every method that steers a beam had an estimate: the "
+                   "methods compared on the same windows."
+             : "Achievable downlink rate vs SNR with the base station's beam steered at the truth "
+               "(perfect) and at each method's estimate, over every window (a method scores gain "
+               "0 before its first estimate).";
+  const std::optional<Table>& table = common ? d.rate_snr_common : d.rate_snr;
+  if (!table) return NotDrawn(png, caption, "the run has no " + stem + ".csv", warnings);
+  const Table& t = *table;
   const long sc = t.Column("snr_db"), bc = t.Column("beam"), rc = t.Column("rate_bps_hz");
   std::vector<std::string> beams;
   std::map<std::string, std::string> rows;
@@ -667,7 +679,11 @@ Figure RateSnr(const RunData& d, const RunReportOptions& o, std::vector<std::str
     if (!rows.count(beam)) beams.push_back(beam);
     rows[beam] += ShortestNumber(t.Number(i, sc)) + " " + ShortestNumber(t.Number(i, rc)) + "\n";
   }
-  if (beams.empty()) return NotDrawn(png, caption, "rate_snr.csv has no rows", warnings);
+  // No common window (a short run, a method that never answered) is an
+  // outcome, not a fault: said on the page, no warning.
+  if (beams.empty() && common)
+    return {png, caption, "no window in which every method that steers a beam had an estimate"};
+  if (beams.empty()) return NotDrawn(png, caption, stem + ".csv has no rows", warnings);
   std::ostringstream gp;
   std::string plots;
   for (std::size_t k = 0; k < beams.size(); ++k) {
@@ -682,7 +698,8 @@ Figure RateSnr(const RunData& d, const RunReportOptions& o, std::vector<std::str
              "' title uavsim_beam" + std::to_string(k);
   }
   gp << "set title "
-     << GnuplotString("Achievable rate vs SNR: " + d.scenario.value("name", std::string("run")))
+     << GnuplotString(std::string(common ? "On common windows: " : "Achievable rate vs SNR: ") +
+                      d.scenario.value("name", std::string("run")))
      << "\nset xlabel 'SNR (dB)'\nset ylabel 'Rate (bit/s/Hz)'\nset grid\nset key top left\n"
      << plots << "\n";
   return Draw(d, o, png, caption, gp.str(), 800, 560, warnings);
@@ -865,7 +882,8 @@ std::vector<std::string> WriteRunReport(const std::string& dir, const RunReportO
   }
   const Figure top = TopView(d, options, &warnings);
   const Figure error_time = ErrorTime(d, errors, packets, options, &warnings);
-  const Figure rate = RateSnr(d, options, &warnings);
+  const Figure rate = RateSnr(d, false, options, &warnings);
+  const Figure rate_common = RateSnr(d, true, options, &warnings);
 
   const std::string name = d.scenario.value("name", std::string("run"));
   HtmlPage page("uavsim run: " + name);
@@ -895,7 +913,10 @@ std::vector<std::string> WriteRunReport(const std::string& dir, const RunReportO
       "Raw: the sensor's frames; pre-processed: what the node's pre-processing keeps; compressed: "
       "the IB-CC latent messages sent on the uplink.");
   page.Heading("Base-station beam");
+  page.BeginRow();
   AddFigure(page, rate);
+  AddFigure(page, rate_common);
+  page.EndRow();
   page.Heading("Scenario");
   page.Table(SettingsRows(d));
   page.Heading("Where the wall time went");
@@ -907,8 +928,8 @@ std::vector<std::string> WriteRunReport(const std::string& dir, const RunReportO
   std::string links;
   for (const char* f :
        {"manifest.json", "metrics.json", "truth.csv", "estimates.csv", "packets.csv",
-        "rate_snr.csv", "world_top.csv", "layout.csv", "report/errors.csv", "report/windows.csv",
-        "report/packets_by_fate.csv", "report/latency.csv"}) {
+        "rate_snr.csv", "rate_snr_common.csv", "world_top.csv", "layout.csv", "report/errors.csv",
+        "report/windows.csv", "report/packets_by_fate.csv", "report/latency.csv"}) {
     if (!fs::is_regular_file(d.dir / f, ec)) continue;
     links += std::string(links.empty() ? "" : " · ") + "<a href=\"" + HtmlEscape(f) + "\">" +
              HtmlEscape(f) + "</a>";

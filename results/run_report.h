@@ -5,11 +5,13 @@
 //
 // Reads (run directory, sim/run_writer.h): manifest.json, metrics.json,
 // truth.csv, estimates.csv, packets.csv, world_top.csv, layout.csv,
-// rate_snr.csv. A file a run of an older version lacks leaves its figures
+// rate_snr.csv, rate_snr_common.csv. A file a run of an older version lacks leaves its figures
 // out with a note saying which file is missing.
 //
 // Writes (each file atomically):
 //   rate_snr.png             achievable rate vs SNR, a line per beam
+//   rate_snr_common.png      the same over the windows every steering
+//                            method estimated (rate_snr_common.csv)
 //   report/errors.csv        t_s,method,error_m,east_m,north_m,up_m: each
 //                            estimate minus the truth at t_s (truth.csv
 //                            interpolated linearly in time)

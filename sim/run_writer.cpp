@@ -30,6 +30,8 @@ core::Json Metrics(const FinishedRun& run) {
   core::Json common_json = core::Json::object();
   for (const auto& [method, value] : summary.rmse_common_m) common_json[method] = value;
   metrics["rmse_common_m"] = common_json;
+  // rate_snr_common.csv's windows: those every beam-steering method estimated.
+  metrics["rate_snr_common_windows"] = run.scores.downlink_common_windows();
   if (!run.edge.model_info().is_null()) metrics["uavloc_model"] = run.edge.model_info();
   core::Json modalities = core::Json::object();
   for (const auto& [m, traffic] : run.traffic) modalities[m] = {{"frames", traffic.frames}};
@@ -93,6 +95,7 @@ void WriteRunTables(results::RunDirectory& dir, const FinishedRun& run) {
   dir.WriteText("world_top.csv", WorldTopTable(run.scenario, run.world).str());
   dir.WriteText("layout.csv", LayoutTable(run.scenario, run.world).str());
   dir.WriteText("rate_snr.csv", run.scores.downlink().rates().Csv());
+  dir.WriteText("rate_snr_common.csv", run.scores.downlink_common().rates().Csv());
 }
 
 void WriteRunMetrics(results::RunDirectory& dir, const FinishedRun& run) {

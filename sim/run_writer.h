@@ -32,7 +32,8 @@ struct FinishedRun {
 
 // Writes the run's tables into `dir`'s staging folder: truth.csv,
 // estimates.csv, packets.csv, world_top.csv and layout.csv (sim/run_map.h),
-// rate_snr.csv.
+// rate_snr.csv and rate_snr_common.csv (the same over the windows every
+// beam-steering method estimated).
 //
 // packets.csv: a row per message a node sent, in the order sent:
 //   t_capture_s,node,modality,sequence,bytes,window,status,t_arrival_s,latency_s

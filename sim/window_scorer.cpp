@@ -7,13 +7,14 @@
 namespace uavsim::sim {
 namespace {
 
-channel::DownlinkScorer MakeDownlink(const Scenario& s, std::vector<std::string> steered) {
+channel::DownlinkScorer MakeDownlink(const Scenario& s, std::vector<std::string> steered,
+                                     const std::string& stream) {
   const double rain_db_per_km = core::RainSpecificAttenuationDbPerKm(
       s.base_station.carrier_ghz, s.weather.rain_mm_h, core::Polarization::kVertical, 0.0);
   return channel::DownlinkScorer(
       s.base_station, rain_db_per_km, std::move(steered),
       channel::SnrGridDb(s.outputs.snr_db.from, s.outputs.snr_db.to, s.outputs.snr_db.step),
-      core::RngStream(s.seed, "base_station/downlink"));
+      core::RngStream(s.seed, stream));
 }
 
 }  // namespace
@@ -21,7 +22,9 @@ channel::DownlinkScorer MakeDownlink(const Scenario& s, std::vector<std::string>
 WindowScorer::WindowScorer(const Scenario& scenario, std::vector<std::string> steered)
     : scenario_(scenario),
       steered_(steered),
-      downlink_(MakeDownlink(scenario, std::move(steered))) {}
+      downlink_(MakeDownlink(scenario, steered, "base_station/downlink")),
+      downlink_common_(MakeDownlink(scenario, std::move(steered), "base_station/downlink/common")) {
+}
 
 void WindowScorer::Score(double t_s, const Eigen::Vector3d& truth_m,
                          const std::map<std::string, Eigen::Vector3d>& estimated,
@@ -41,6 +44,10 @@ void WindowScorer::Score(double t_s, const Eigen::Vector3d& truth_m,
   for (const std::string& beam : steered_)
     if (auto it = estimated.find(beam); it != estimated.end()) steering.insert(*it);
   downlink_.AddWindow(truth_m, steering, world);
+  if (!steered_.empty() && steering.size() == steered_.size()) {
+    downlink_common_.AddWindow(truth_m, steering, world);
+    ++downlink_common_windows_;
+  }
 }
 
 std::map<std::string, RmseAccumulator> WindowScorer::rmse() const {

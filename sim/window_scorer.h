@@ -3,9 +3,13 @@
 // the window's end (estimates.csv rows, RMSE over the windows it estimated
 // and over the windows every method estimated), and the base station's
 // downlink steered at each estimate (rate_snr.csv; channel/beamformer.h). A
-// method scores beam gain 0 in windows where it has no estimate yet.
+// method scores beam gain 0 in windows where it has no estimate yet. A
+// second downlink scores only the windows in which every steering method
+// has an estimate (rate_snr_common.csv): the methods' curves on the same
+// windows, as the RMSE over common windows.
 //
-// Determinism: the downlink draws from its own stream "base_station/downlink".
+// Determinism: the downlinks draw from their own streams
+// "base_station/downlink" and "base_station/downlink/common".
 #pragma once
 
 #include <Eigen/Core>
@@ -43,6 +47,9 @@ class WindowScorer {
   std::uint64_t windows() const { return windows_; }
   const results::CsvTable& estimates() const { return estimates_; }
   const channel::DownlinkScorer& downlink() const { return downlink_; }
+  // Over the windows every steering method estimated (none steering: empty).
+  const channel::DownlinkScorer& downlink_common() const { return downlink_common_; }
+  std::uint64_t downlink_common_windows() const { return downlink_common_windows_; }
   // Per method that ran (every /pipeline/methods entry, estimated or not).
   std::map<std::string, RmseAccumulator> rmse() const;
   // Per method over the windows every method estimated (two or more methods).
@@ -52,6 +59,8 @@ class WindowScorer {
   const Scenario& scenario_;
   std::vector<std::string> steered_;
   channel::DownlinkScorer downlink_;
+  channel::DownlinkScorer downlink_common_;
+  std::uint64_t downlink_common_windows_ = 0;
   results::CsvTable estimates_{{"t_s", "method", "x_m", "y_m", "z_m"}};
   std::map<std::string, RmseAccumulator> rmse_, rmse_common_;
   std::uint64_t windows_ = 0;

@@ -73,6 +73,8 @@ std::string HandMadeRun(const std::string& tag, const std::string& name = "hand"
             "cam1,fov,1,2,3\ncam1,fov,11,2,3\ncam1,fov,1,12,3\ncam1,fov,1,2,3\n");
   WriteFile(dir + "/rate_snr.csv",
             "snr_db,beam,rate_bps_hz\n0,perfect,1.0\n0,good,0.9\n10,perfect,3.4\n10,good,3.0\n");
+  WriteFile(dir + "/rate_snr_common.csv",
+            "snr_db,beam,rate_bps_hz\n0,perfect,1.0\n0,good,0.95\n10,perfect,3.4\n10,good,3.2\n");
   return dir;
 }
 
@@ -127,7 +129,7 @@ TEST_CASE("Run report: the page shows the figures and tables, every reference ex
   } else {
     CHECK(warnings.empty());
     for (const char* png : {"report/top_view.png", "report/error_time.png", "report/packets.png",
-                            "report/latency.png", "rate_snr.png"}) {
+                            "report/latency.png", "rate_snr.png", "rate_snr_common.png"}) {
       INFO(png);
       CHECK(html.find(std::string("src=\"") + png + "\"") != std::string::npos);
       REQUIRE(fs::exists(dir + "/" + png));
@@ -163,18 +165,33 @@ TEST_CASE("Run report: without gnuplot or an older run's files, the page says wh
           "[results][run_report]") {
   const std::string dir = HandMadeRun("report-missing");
   fs::remove(dir + "/packets.csv");
+  fs::remove(dir + "/rate_snr_common.csv");  // runs before issue 19's common windows
   RunReportOptions o;
   o.gnuplot = "/nonexistent/gnuplot";
   const auto warnings = WriteRunReport(dir, o);
   const std::string html = ReadFile(dir + "/report.html");
   CHECK(html.find("Not drawn: the run has no packets.csv") != std::string::npos);
   CHECK(html.find("Not drawn: gnuplot not found") != std::string::npos);
+  CHECK(html.find("Not drawn: the run has no rate_snr_common.csv") != std::string::npos);
   CHECK(References(html).count("report/top_view.png") == 0);
   CHECK(!fs::exists(dir + "/report/top_view.png"));
   CHECK(!fs::exists(dir + "/report/windows.csv"));
-  // One warning per figure: top view, error vs time, packets, rate vs SNR.
-  CHECK(warnings.size() == 4);
+  // One warning per figure: top view, error vs time, packets, rate vs SNR
+  // on all windows and on common ones.
+  CHECK(warnings.size() == 5);
   for (const auto& w : warnings) CHECK(!w.empty());
+}
+
+TEST_CASE("Run report: no common window is said on the page, not warned about",
+          "[results][run_report]") {
+  const std::string dir = HandMadeRun("report-no-common");
+  WriteFile(dir + "/rate_snr_common.csv", "snr_db,beam,rate_bps_hz\n");
+  const auto warnings = WriteRunReport(dir);
+  const std::string html = ReadFile(dir + "/report.html");
+  CHECK(html.find("no window in which every method that steers a beam had an estimate") !=
+        std::string::npos);
+  CHECK(!fs::exists(dir + "/rate_snr_common.png"));
+  for (const auto& w : warnings) CHECK_THAT(w, !Catch::Contains("rate_snr_common"));
 }
 
 TEST_CASE("Run report: refuses what is not a run directory, naming the file",

@@ -208,6 +208,15 @@ TEST_CASE("CLI: train --quick learns, is deterministic, and its model runs in th
     for (const std::string& m : methods) sum_sq[m] += (est[m][t] - truth.at(t)).squaredNorm();
   }
   CHECK(metrics["common_windows"].get<std::uint64_t>() == common);
+  // Every method steers a beam: the rate-vs-SNR curves on common windows
+  // are over the same windows, each beam with its rows.
+  CHECK(metrics["rate_snr_common_windows"].get<std::uint64_t>() == common);
+  CHECK(common > 0);
+  const std::string common_rates = ReadFile(run + "/rate_snr_common.csv");
+  for (const char* beam : {"perfect", "uavloc", "uavloc_anchored", "anchor_track", "ekf"}) {
+    INFO(beam);
+    CHECK(common_rates.find("," + std::string(beam) + ",") != std::string::npos);
+  }
   if (common > 0) {
     for (const std::string& m : methods)
       CHECK(metrics["rmse_common_m"][m].get<double>() ==
