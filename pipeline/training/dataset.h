@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -27,10 +28,52 @@ struct Sample {
   std::optional<PointObservation> points;             // set for LiDAR and radar
 };
 
+// An episode's samples, shared between copies of the episode until one of
+// them changes its own (copy on write): a split by frame puts one episode in
+// all three parts without three copies of its crops (a full-size data set
+// of 8 GB in memory would need 24). Reads through a const list never copy;
+// a non-const begin(), end(), operator[], push_back, clear or resize makes
+// this list's samples its own first. Not thread-safe for concurrent writers
+// of copies that share samples.
+class SampleList {
+ public:
+  using value_type = Sample;
+  using const_iterator = std::vector<Sample>::const_iterator;
+  using iterator = std::vector<Sample>::iterator;
+
+  std::size_t size() const { return p_ ? p_->size() : 0; }
+  bool empty() const { return size() == 0; }
+  const Sample& operator[](std::size_t i) const { return (*p_)[i]; }
+  const Sample& at(std::size_t i) const { return View().at(i); }
+  const Sample& front() const { return View().front(); }
+  const Sample& back() const { return View().back(); }
+  const_iterator begin() const { return View().begin(); }
+  const_iterator end() const { return View().end(); }
+
+  Sample& operator[](std::size_t i) { return Own()[i]; }
+  Sample& at(std::size_t i) { return Own().at(i); }
+  Sample& front() { return Own().front(); }
+  Sample& back() { return Own().back(); }
+  iterator begin() { return Own().begin(); }
+  iterator end() { return Own().end(); }
+  void push_back(Sample s) { Own().push_back(std::move(s)); }
+  void clear() { Own().clear(); }
+  void resize(std::size_t n) { Own().resize(n); }
+  void reserve(std::size_t n) { Own().reserve(n); }
+
+  // Whether this list and `other` hold the same samples in memory.
+  bool SharesWith(const SampleList& other) const { return p_ && p_ == other.p_; }
+
+ private:
+  const std::vector<Sample>& View() const;
+  std::vector<Sample>& Own();
+  std::shared_ptr<std::vector<Sample>> p_;
+};
+
 struct Episode {
   std::string label;  // what varied, for reports: "orbit seed 7 rain 4 mm/h loss 0.12"
   double window_s = 0.2;
-  std::vector<Sample> samples;                // in capture order
+  SampleList samples;                         // in capture order
   std::vector<Eigen::Vector3d> window_truth;  // [k - 1]: target position at k t^w
   // The windows whose truth the part of a Dataset holding this copy may use:
   // empty, every window (a split by trajectory); else [k - 1] is 1 for the

@@ -165,6 +165,19 @@ void WriteEpisodes(const std::vector<Episode>& episodes, const std::string& path
   if (ec) throw std::runtime_error(path + ": cannot write: " + ec.message());
 }
 
+const std::vector<Sample>& SampleList::View() const {
+  static const std::vector<Sample> kNone;
+  return p_ ? *p_ : kNone;
+}
+
+std::vector<Sample>& SampleList::Own() {
+  if (!p_)
+    p_ = std::make_shared<std::vector<Sample>>();
+  else if (p_.use_count() > 1)
+    p_ = std::make_shared<std::vector<Sample>>(*p_);
+  return *p_;
+}
+
 const char* DataSplitName(DataSplit s) { return s == DataSplit::kFrame ? "frame" : "trajectory"; }
 
 std::string WeatherOf(const Episode& e) {

@@ -281,7 +281,7 @@ std::vector<std::vector<std::vector<float>>> EncodeEpisodes(const std::vector<Ep
   torch::NoGradGuard no_grad;
   std::vector<std::vector<std::vector<float>>> latents(episodes.size());
   for (std::size_t e = 0; e < episodes.size(); ++e) {
-    const std::vector<Sample>& samples = episodes[e].samples;
+    const SampleList& samples = episodes[e].samples;
     latents[e].resize(samples.size());
     for (int m = 0; m < kModalityCount; ++m) {
       IbCcModel& model = encoders[static_cast<std::size_t>(m)];

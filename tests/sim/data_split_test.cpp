@@ -7,6 +7,7 @@
 #include <map>
 #include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "pipeline/training/dataset.h"
@@ -102,4 +103,31 @@ TEST_CASE("Split by frame: every window in exactly one part, about 70/15/15, see
   CHECK(other.test[2].scored_windows != d.test[2].scored_windows);
   // Too few windows to train on is refused.
   CHECK_THROWS_AS(uavsim::sim::SplitByFrame(Episodes(1, 0), 3), std::invalid_argument);
+}
+
+TEST_CASE("Split by frame: the three copies of a flight share its samples until one changes",
+          "[sim][train]") {
+  auto d = uavsim::sim::SplitByFrame(Episodes(6, 10), 3);
+  REQUIRE(d.train.size() == 6);
+  for (std::size_t i = 0; i < d.train.size(); ++i) {
+    CHECK(d.train[i].samples.SharesWith(d.validation[i].samples));
+    CHECK(d.train[i].samples.SharesWith(d.test[i].samples));
+  }
+  // Reading through const copies keeps the sharing; writing to one copy
+  // gives it its own samples and leaves the others as they were.
+  const Episode& train = d.train[2];
+  const Episode& validation = d.validation[2];
+  const Episode& test = d.test[2];
+  const double t = test.samples.front().t_s;
+  CHECK(validation.samples.front().t_s == t);
+  for (const auto& s : train.samples) CHECK(s.t_s == t);
+  CHECK(train.samples.SharesWith(test.samples));
+  d.train[2].samples[0].t_s = t + 1.0;
+  CHECK_FALSE(train.samples.SharesWith(validation.samples));
+  CHECK(validation.samples.SharesWith(test.samples));
+  CHECK(validation.samples.front().t_s == t);
+  CHECK(train.samples.front().t_s == t + 1.0);
+  d.test[3].samples.push_back(Episodes(1, 1).front().samples.front());
+  CHECK(std::as_const(d.test[3]).samples.size() == 2);
+  CHECK(std::as_const(d.validation[3]).samples.size() == 1);
 }
