@@ -48,6 +48,23 @@ void CheckManifestFits(const Scenario& s, const std::string& file, const std::st
                                 core::FormatNumber(s.pipeline.window_s) + " s: " + kHowToTrain);
 }
 
+// Where the model departs from the paper's design (Secs. IV-V): the training
+// config's switches of our extensions, as "key=value"; empty, the paper's
+// design throughout; null for a model without a recorded config.
+core::Json ExtensionsOf(const pipeline::ModelManifest& m) {
+  if (!m.training) return nullptr;
+  const pipeline::TrainingConfig& t = *m.training;
+  core::Json ext = core::Json::array();
+  if (t.camera_stereo_branches != pipeline::StereoBranches::kTwo)
+    ext.push_back("camera_stereo_branches=shared");
+  if (t.camera_eye_pool_side != 0)
+    ext.push_back("camera_eye_pool_side=" + std::to_string(t.camera_eye_pool_side));
+  if (t.camera_roi_geometry) ext.push_back("camera_roi_geometry=true");
+  if (t.te_align_tau_origin != pipeline::TauOrigin::kClock)
+    ext.push_back("te_align_tau_origin=window");
+  return ext;
+}
+
 // The trained model a scenario names, loaded for the run loop. Throws
 // core::ConfigError naming the scenario's /pipeline/model when it is missing
 // or does not fit the scenario.
@@ -72,8 +89,11 @@ std::unique_ptr<pipeline::UavLocModelFiles> LoadModel(const Scenario& s, const s
   core::Json heads = core::Json::array();
   if (!model->heads().paper.empty()) heads.push_back("paper");
   if (!model->heads().anchored.empty()) heads.push_back("anchored");
-  info = {
-      {"path", path}, {"trained_for", m.scenario}, {"same_layout", same_layout}, {"heads", heads}};
+  info = {{"path", path},
+          {"trained_for", m.scenario},
+          {"same_layout", same_layout},
+          {"heads", heads},
+          {"extensions", ExtensionsOf(m)}};
   return model;
 }
 
