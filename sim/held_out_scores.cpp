@@ -3,8 +3,10 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <map>
 #include <optional>
 #include <stdexcept>
+#include <utility>
 
 #include "pipeline/anchored/anchor_track.h"
 #include "pipeline/anchored/geometric_anchor.h"
@@ -18,12 +20,18 @@ namespace {
 struct Sums {
   double squared = 0.0;
   std::size_t windows = 0;
+  std::map<std::pair<std::size_t, std::int64_t>, double> by_window;  // (episode, k - 1)
+  void Add(std::size_t episode, std::int64_t k, double squared_m2) {
+    squared += squared_m2;
+    ++windows;
+    by_window[{episode, k - 1}] = squared_m2;
+  }
 };
 
-// One episode, the modalities `bits` allows: adds each method's squared
+// Episode `index`, the modalities `bits` allows: adds each method's squared
 // errors over the windows it counts.
-void ReplayEpisode(const Scenario& base, const pipeline::Episode& ep, int bits, Sums& ekf_sums,
-                   Sums& track_sums) {
+void ReplayEpisode(const Scenario& base, const pipeline::Episode& ep, std::size_t index, int bits,
+                   Sums& ekf_sums, Sums& track_sums) {
   pipeline::TeAlignConfig align_config;
   align_config.window_s = ep.window_s;
   const pipeline::TeAlign align(align_config);
@@ -64,8 +72,8 @@ void ReplayEpisode(const Scenario& base, const pipeline::Episode& ep, int bits, 
     const std::optional<Eigen::Vector3d> p_track = track.OnWindow(k, anchors);
     if (!started || !ep.Scored(k)) continue;
     const Eigen::Vector3d& truth = ep.window_truth[static_cast<std::size_t>(k - 1)];
-    if (p_ekf) ekf_sums.squared += (*p_ekf - truth).squaredNorm(), ++ekf_sums.windows;
-    if (p_track) track_sums.squared += (*p_track - truth).squaredNorm(), ++track_sums.windows;
+    if (p_ekf) ekf_sums.Add(index, k, (*p_ekf - truth).squaredNorm());
+    if (p_track) track_sums.Add(index, k, (*p_track - truth).squaredNorm());
   }
 }
 
@@ -76,11 +84,13 @@ std::map<std::string, pipeline::Evaluation> ScoreClassicalMethods(
   std::map<std::string, pipeline::Evaluation> out;
   for (int bits = 1; bits <= pipeline::kModalitySubsets; ++bits) {
     Sums ekf, track;
-    for (const pipeline::Episode& ep : episodes) ReplayEpisode(base, ep, bits, ekf, track);
+    for (std::size_t i = 0; i < episodes.size(); ++i)
+      ReplayEpisode(base, episodes[i], i, bits, ekf, track);
     const std::string key = pipeline::ModalitySubsetName(bits);
     for (const auto& [method, sums] : {std::pair{"ekf", ekf}, std::pair{"anchor_track", track}}) {
       pipeline::Evaluation& ev = out[method];
       ev.windows[key] = sums.windows;
+      ev.squared_error_m2[key] = sums.by_window;
       ev.rmse_m[key] = sums.windows > 0 ? std::sqrt(sums.squared / sums.windows)
                                         : std::numeric_limits<double>::quiet_NaN();
     }

@@ -194,7 +194,10 @@ const char* kTrainHelp =
     "                 threads (default 1; per rank under mpirun, where rank 0 hands out\n"
     "                 episodes and trains); the episodes are the same whatever N\n"
     "  --data FILE    the simulated episodes: read FILE if it exists (no simulation),\n"
-    "                 else simulate and write it (train again without simulating)\n"
+    "                 else simulate and write it (train again without simulating);\n"
+    "                 with --episodes N, the first N of FILE, and when FILE holds fewer\n"
+    "                 (made with the same scenario and seed) the missing ones are\n"
+    "                 simulated and FILE extended: the same set as a fresh simulation\n"
     "  --set P=V      override the scenario's value at JSON pointer P\n"
     "  --force        replace an existing MODEL folder\n"
     "\n"
@@ -506,6 +509,22 @@ int Train(int argc, char** argv) {
       std::printf("held-out RMSE of %s (m):", method.c_str());
       for (const auto& [k, v] : ev.rmse_m) std::printf(" %s %.3f", k.c_str(), v);
       std::printf("\n");
+    }
+    if (r.test_common.size() > 1) {
+      std::size_t fewest = ~std::size_t{0}, most = 0;
+      for (const auto& [method, ev] : r.test) {
+        fewest = std::min(fewest, ev.windows.at("all"));
+        most = std::max(most, ev.windows.at("all"));
+      }
+      std::printf(
+          "held-out RMSE on the windows every method counted (m; all: %zu windows, each method "
+          "alone %zu to %zu):\n",
+          r.test_common.begin()->second.windows.at("all"), fewest, most);
+      for (const auto& [method, ev] : r.test_common) {
+        std::printf("  %-16s", method.c_str());
+        for (const auto& [k, v] : ev.rmse_m) std::printf(" %s %.3f", k.c_str(), v);
+        std::printf("\n");
+      }
     }
     std::printf("model written to %s (use: --set /pipeline/model=%s)\n", c.out_dir.c_str(),
                 c.out_dir.c_str());

@@ -8,12 +8,14 @@
 #include <deque>
 #include <filesystem>
 #include <iostream>
+#include <iterator>
 #include <memory>
 
 #include "pipeline/model_bundle.h"
 #include "pipeline/torch_runtime.h"
 #include "pipeline/training/dataset_io.h"
 #include "results/run_directory.h"
+#include "sim/core/error.h"
 #include "sim/core/progress.h"
 #include "sim/core/rng.h"
 #include "sim/core/trajectory.h"
@@ -255,6 +257,46 @@ std::vector<pipeline::Episode> SimulateEpisodes(const Scenario& base, const Epis
   return episodes;
 }
 
+SavedEpisodes ReadSavedEpisodes(const Scenario& base, const EpisodePlan& plan, int count,
+                                bool keep_length, const std::string& file) {
+  SavedEpisodes saved;
+  saved.episodes = pipeline::ReadEpisodes(file);
+  std::vector<pipeline::Episode>& held = saved.episodes;
+  saved.missing = plan;
+  EpisodePlan& missing = saved.missing;
+  // The length FILE's episodes were simulated for: whole windows of it.
+  const auto length_of = [](const pipeline::Episode& e) {
+    return e.window_s * static_cast<double>(e.window_truth.size());
+  };
+  if (!held.empty() && keep_length) missing.episode_s = length_of(held.front());
+  const std::size_t want = count > 0 ? static_cast<std::size_t>(count) : held.size();
+  if (want <= held.size()) {
+    held.resize(want);
+    if (!held.empty()) missing.episode_s = length_of(held.front());
+    missing.first_episode = static_cast<int>(want);
+    missing.episodes = 0;
+    return saved;
+  }
+  // Extending: the set must be this plan's, or the result would mix two.
+  const auto refuse = [&file](const std::string& why) {
+    throw core::UsageError("uavsim train: " + file + ": cannot extend these episodes: " + why);
+  };
+  for (std::size_t i = 0; i < held.size(); ++i) {
+    const pipeline::Episode& e = held[i];
+    if (std::abs(length_of(e) - missing.episode_s) >= e.window_s)
+      refuse("episode " + std::to_string(i) + " is " + core::FormatNumber(length_of(e)) +
+             " s long, --episode-s asks for " + core::FormatNumber(missing.episode_s) + " s");
+    std::string label;
+    EpisodeScenario(base, missing, static_cast<int>(i), &label);
+    if (label != e.label)
+      refuse("episode " + std::to_string(i) + " is '" + e.label + "' where this scenario" +
+             " and seed draw '" + label + "' (made with another scenario, seed or --quick)");
+  }
+  missing.first_episode = static_cast<int>(held.size());
+  missing.episodes = static_cast<int>(want - held.size());
+  return saved;
+}
+
 pipeline::Dataset SplitByTrajectory(std::vector<pipeline::Episode> episodes, std::uint64_t seed) {
   const std::size_t n = episodes.size();
   std::vector<std::size_t> order(n);
@@ -368,40 +410,48 @@ std::optional<pipeline::TrainReport> RunTraining(const Scenario& base, const Tra
     world = std::make_unique<boost::mpi::communicator>();
   }
   EpisodeJobs jobs{c.jobs, c.quiet, "", world.get()};
+  // What is left to simulate, rank 0 tells the others: [first, first + count)
+  // episodes of `length` s.
+  const auto share_plan = [&world](EpisodePlan& p) {
+    if (!world) return;
+    boost::mpi::broadcast(*world, p.first_episode, 0);
+    boost::mpi::broadcast(*world, p.episodes, 0);
+    boost::mpi::broadcast(*world, p.episode_s, 0);
+  };
   if (world && world->rank() != 0) {
-    int simulate = 0;
-    boost::mpi::broadcast(*world, simulate, 0);
-    if (simulate) SimulateEpisodes(base, plan, jobs);
+    share_plan(plan);
+    if (plan.episodes > 0) SimulateEpisodes(base, plan, jobs);
     return std::nullopt;
   }
 
+  pipeline::InitTorch(c.threads, c.seed);
   std::optional<results::RunDirectory> dir;
-  bool simulate = true;
+  std::vector<pipeline::Episode> episodes;
+  EpisodePlan todo = plan;  // all of them, unless --data holds some
   try {
     dir.emplace(c.out_dir, c.force);  // the model folder, all-or-nothing
     std::error_code ec;
-    simulate = c.data_file.empty() || !fs::is_regular_file(c.data_file, ec);
+    if (!c.data_file.empty() && fs::is_regular_file(c.data_file, ec)) {
+      SavedEpisodes saved =
+          ReadSavedEpisodes(base, plan, c.episodes, c.episode_s <= 0, c.data_file);
+      episodes = std::move(saved.episodes);
+      todo = saved.missing;
+    }
   } catch (const std::exception& e) {
     if (!world) throw;
     std::cerr << e.what() << "\n";
     world->abort(2);
   }
-  if (world) {
-    int flag = simulate ? 1 : 0;
-    boost::mpi::broadcast(*world, flag, 0);
-  }
-  pipeline::InitTorch(c.threads, c.seed);
-  std::vector<pipeline::Episode> episodes;
-  if (!simulate) {
-    episodes = pipeline::ReadEpisodes(c.data_file);
-    plan.episodes = static_cast<int>(episodes.size());
-    if (!episodes.empty() && !episodes.front().window_truth.empty())
-      plan.episode_s = episodes.front().window_s * episodes.front().window_truth.size();
-  } else {
+  share_plan(todo);
+  if (todo.episodes > 0) {
     jobs.scratch_dir = dir->StagingPath("episodes.partial");
-    episodes = SimulateEpisodes(base, plan, jobs);
+    std::vector<pipeline::Episode> more = SimulateEpisodes(base, todo, jobs);
+    episodes.insert(episodes.end(), std::make_move_iterator(more.begin()),
+                    std::make_move_iterator(more.end()));
     if (!c.data_file.empty()) pipeline::WriteEpisodes(episodes, c.data_file);
   }
+  plan.episodes = static_cast<int>(episodes.size());
+  plan.episode_s = todo.episode_s;
   pipeline::Dataset data = c.split == pipeline::DataSplit::kFrame
                                ? SplitByFrame(std::move(episodes), c.seed)
                                : SplitByTrajectory(std::move(episodes), c.seed);

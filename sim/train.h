@@ -60,6 +60,22 @@ struct EpisodeJobs {
 std::vector<pipeline::Episode> SimulateEpisodes(const Scenario& base, const EpisodePlan& plan,
                                                 const EpisodeJobs& jobs);
 
+// `uavsim train --data FILE` when FILE exists: the episodes it holds, cut to
+// the first `count` (0: all of them), and the plan of those still to
+// simulate when `count` asks for more (`missing.first_episode` = what FILE
+// holds, `missing.episodes` = how many more, 0 when none). Episode i depends
+// only on the scenario, the seed and i, so the extended set is the one a
+// fresh simulation of `count` episodes gives. Throws core::UsageError naming
+// FILE when extending a set made with another seed or scenario (an episode's
+// label differs from what `plan` draws) or with another episode length
+// (`plan.episode_s`, unless `keep_length`: then FILE's length is used).
+struct SavedEpisodes {
+  std::vector<pipeline::Episode> episodes;
+  EpisodePlan missing;
+};
+SavedEpisodes ReadSavedEpisodes(const Scenario& base, const EpisodePlan& plan, int count,
+                                bool keep_length, const std::string& file);
+
 // Splits by trajectory: 15 % test and 15 % validation (at least one each when
 // there are three or more episodes), the rest training; which episode goes
 // where is a seeded shuffle.

@@ -9,7 +9,7 @@
 foreach(entry
     "CLI: train --quick learns, is deterministic, and its model runs in the loop=300"
     "The default model: three modalities beat each single one on held-out trajectories=115"
-    "CLI: train --jobs 2 and mpirun simulate the episodes one job does, byte for byte=90"
+    "CLI: train --jobs 2 and mpirun simulate the episodes one job does, byte for byte, and extend a saved set exactly=150"
     "Kill: training killed at random moments leaves no half-written model or data=90")
   string(FIND "${entry}" "=" at REVERSE)
   string(SUBSTRING "${entry}" 0 ${at} name)

@@ -7,7 +7,7 @@
 # variable is read by nobody.
 foreach(name
     "Sweep: under mpirun the points and tables equal a local run's"
-    "CLI: train --jobs 2 and mpirun simulate the episodes one job does, byte for byte")
+    "CLI: train --jobs 2 and mpirun simulate the episodes one job does, byte for byte, and extend a saved set exactly")
   set_tests_properties("${name}" PROPERTIES
     ENVIRONMENT_MODIFICATION "ASAN_OPTIONS=string_append::fast_unwind_on_malloc=0")
 endforeach()

@@ -563,8 +563,17 @@ Evaluation Evaluate(UavLocModel& model, const std::vector<WindowSequence>& seque
       const torch::Tensor mask = (s.mask * keep).unsqueeze(0);
       const torch::Tensor y_hat = ForwardSequence(model, s, mask[0]);
       const torch::Tensor w = CountedWindows(mask, s.scored.unsqueeze(0));
-      sum += ((y_hat - s.truth.unsqueeze(0)).square().sum(2) * w).sum().item<double>();
+      const torch::Tensor squared = ((y_hat - s.truth.unsqueeze(0)).square().sum(2) * w)[0];
+      sum += squared.sum().item<double>();
       count += w.sum().item<double>();
+      const torch::Tensor counted = w[0].contiguous(), errors = squared.contiguous();
+      const auto c = counted.accessor<float, 1>();
+      const auto e = errors.accessor<float, 1>();
+      auto& windows = ev.squared_error_m2[key];
+      for (std::int64_t j = 0; j < c.size(0); ++j)
+        if (c[j] > 0.0f)
+          windows[{static_cast<std::size_t>(&s - sequences.data()), j}] =
+              scale * scale * static_cast<double>(e[j]);
     }
     ev.windows[key] = static_cast<std::size_t>(count);
     ev.rmse_m[key] =
@@ -593,6 +602,37 @@ core::Json EvaluationJson(const Evaluation& ev) {
 }
 
 }  // namespace
+
+std::map<std::string, Evaluation> OnCommonWindows(
+    const std::map<std::string, Evaluation>& by_method) {
+  std::map<std::string, Evaluation> out;
+  if (by_method.empty()) return out;
+  const Evaluation& first = by_method.begin()->second;
+  for (const auto& [key, unused] : first.rmse_m) {
+    // The windows of the first method that every other method counted too.
+    std::vector<std::pair<std::size_t, std::int64_t>> common;
+    const auto mine = first.squared_error_m2.find(key);
+    if (mine != first.squared_error_m2.end())
+      for (const auto& [window, e] : mine->second) {
+        bool everyone = true;
+        for (const auto& [method, ev] : by_method) {
+          const auto theirs = ev.squared_error_m2.find(key);
+          everyone =
+              everyone && theirs != ev.squared_error_m2.end() && theirs->second.count(window) > 0;
+        }
+        if (everyone) common.push_back(window);
+      }
+    for (const auto& [method, ev] : by_method) {
+      double sum = 0.0;
+      for (const auto& window : common) sum += ev.squared_error_m2.at(key).at(window);
+      Evaluation& o = out[method];
+      o.windows[key] = common.size();
+      o.rmse_m[key] = common.empty() ? std::numeric_limits<double>::quiet_NaN()
+                                     : std::sqrt(sum / static_cast<double>(common.size()));
+    }
+  }
+  return out;
+}
 
 std::string ModalitySubsetName(int bits) {
   if (bits < 1 || bits > kModalitySubsets)
@@ -668,20 +708,20 @@ TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& o, const ModelM
 
   // The test episodes by weather (AlignAll keeps the episodes with windows,
   // in order), and the classical methods on them.
+  // (Copies share the samples: SampleList.)
   std::map<std::string, std::vector<std::size_t>> test_weather;
   std::map<std::string, std::vector<Episode>> test_weather_episodes;
-  {
-    std::size_t i = 0;
-    for (const Episode& e : data.test)
-      if (!e.window_truth.empty()) {
-        test_weather[WeatherOf(e)].push_back(i++);
-        test_weather_episodes[WeatherOf(e)].push_back(e);
-      }
-  }
+  std::vector<Episode> test_episodes;  // test[i] is test_episodes[i]'s
+  for (const Episode& e : data.test)
+    if (!e.window_truth.empty()) {
+      test_weather[WeatherOf(e)].push_back(test_episodes.size());
+      test_weather_episodes[WeatherOf(e)].push_back(e);
+      test_episodes.push_back(e);
+    }
   for (const auto& [weather, episodes] : test_weather_episodes)
     report.test_weather_episodes[weather] = episodes.size();
   if (o.score_classical && !test.empty()) {
-    for (auto& [method, ev] : o.score_classical(data.test)) report.test[method] = std::move(ev);
+    for (auto& [method, ev] : o.score_classical(test_episodes)) report.test[method] = std::move(ev);
     for (const auto& [weather, episodes] : test_weather_episodes)
       for (auto& [method, ev] : o.score_classical(episodes))
         report.test_by_weather[method][weather] = std::move(ev);
@@ -720,6 +760,16 @@ TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& o, const ModelM
       }
     }
     SaveUavLocModel(model, (out / file).string());
+  }
+
+  report.test_common = OnCommonWindows(report.test);
+  {
+    std::map<std::string, std::map<std::string, Evaluation>> by_weather;  // weather -> method
+    for (const auto& [method, weathers] : report.test_by_weather)
+      for (const auto& [weather, ev] : weathers) by_weather[weather][method] = ev;
+    for (const auto& [weather, methods] : by_weather)
+      for (auto& [method, ev] : OnCommonWindows(methods))
+        report.test_by_weather_common[method][weather] = std::move(ev);
   }
 
   const std::string* names[kModalityCount] = {&m.camera, &m.lidar, &m.radar};
@@ -802,6 +852,15 @@ std::string ReportJson(const TrainReport& r, const TrainOptions& o) {
   for (const auto& [method, weathers] : r.test_by_weather)
     for (const auto& [weather, ev] : weathers) by_weather[method][weather] = EvaluationJson(ev);
   j["test_by_weather"] = by_weather;
+  // The same on the windows every method counted.
+  core::Json common = core::Json::object();
+  for (const auto& [method, ev] : r.test_common) common[method] = EvaluationJson(ev);
+  j["test_common_windows"] = common;
+  core::Json by_weather_common = core::Json::object();
+  for (const auto& [method, weathers] : r.test_by_weather_common)
+    for (const auto& [weather, ev] : weathers)
+      by_weather_common[method][weather] = EvaluationJson(ev);
+  j["test_by_weather_common_windows"] = by_weather_common;
   core::Json weather_episodes = core::Json::object();
   for (const auto& [weather, n] : r.test_weather_episodes) weather_episodes[weather] = n;
   j["test_weather_episodes"] = weather_episodes;

@@ -20,6 +20,7 @@
 #include <functional>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "pipeline/model_bundle.h"
@@ -39,7 +40,17 @@ namespace uavsim::pipeline {
 struct Evaluation {
   std::map<std::string, double> rmse_m;
   std::map<std::string, std::size_t> windows;
+  // Each counted window's squared error (m^2), by key, then by (index of the
+  // episode in the list scored, window index k - 1): what OnCommonWindows
+  // intersects. Not written to training_report.json.
+  std::map<std::string, std::map<std::pair<std::size_t, std::int64_t>, double>> squared_error_m2;
 };
+
+// Each method's scores restricted, per key, to the windows every method of
+// `by_method` counted (the same episodes scored by all of them): the "same
+// windows" tables. A key with no common window has rmse nan and 0 windows.
+std::map<std::string, Evaluation> OnCommonWindows(
+    const std::map<std::string, Evaluation>& by_method);
 
 // The subset of modalities `bits` allows (bit m: Modality m), 1..7, as named
 // in Evaluation.
@@ -98,6 +109,10 @@ struct TrainReport {
   // weather -> scores; and how many test episodes each weather has.
   std::map<std::string, std::map<std::string, Evaluation>> test_by_weather;
   std::map<std::string, std::size_t> test_weather_episodes;
+  // `test` and `test_by_weather` on the windows every method counted
+  // (OnCommonWindows, per weather within that weather's episodes).
+  std::map<std::string, Evaluation> test_common;
+  std::map<std::string, std::map<std::string, Evaluation>> test_by_weather_common;
 };
 
 // Trains on `data` and writes the model folder `out_dir` (model.json from

@@ -8,8 +8,10 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "pipeline/training/dataset.h"
@@ -141,8 +143,19 @@ TEST_CASE("Held-out scores: windows count from the first arrival and in their pa
   part.scored_windows.assign(kWindows, 0);
   for (int k = 31; k <= kWindows; ++k) part.scored_windows[k - 1] = 1;
   scores = uavsim::sim::ScoreClassicalMethods(s, {part});
-  for (const char* method : {"ekf", "anchor_track"})
-    CHECK(scores.at(method).windows.at("all") == 20);
+  for (const char* method : {"ekf", "anchor_track"}) {
+    INFO(method);
+    const uavsim::pipeline::Evaluation& ev = scores.at(method);
+    CHECK(ev.windows.at("all") == 20);
+    // Each counted window's error, keyed (episode, k - 1): windows 31..50.
+    const auto& per_window = ev.squared_error_m2.at("all");
+    REQUIRE(per_window.size() == 20);
+    CHECK(per_window.begin()->first == std::pair<std::size_t, std::int64_t>{0, 30});
+    CHECK(per_window.rbegin()->first == std::pair<std::size_t, std::int64_t>{0, kWindows - 1});
+    double sum = 0.0;
+    for (const auto& [window, e] : per_window) sum += e;
+    CHECK(std::sqrt(sum / 20.0) == Approx(ev.rmse_m.at("all")));
+  }
   // Samples that arrived late are not the heads' inputs, nor these methods'.
   Episode lost = StraightFlight(s, 0.01);
   for (Sample& sample : lost.samples) sample.on_time = false;

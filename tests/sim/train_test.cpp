@@ -103,6 +103,18 @@ TEST_CASE("CLI: train --quick learns, is deterministic, and its model runs in th
   for (const char* method : {"uavloc", "uavloc_anchored", "ekf", "anchor_track"})
     CHECK(report["test_by_weather"][method]["clear"]["all"]["windows"] ==
           report["test"][method]["all"]["windows"]);
+  // Every method on the windows all of them counted: one count for all,
+  // never more than a method counted alone.
+  REQUIRE(report.contains("test_common_windows"));
+  const int same = report["test_common_windows"]["ekf"]["all"]["windows"].get<int>();
+  CHECK(same > 0);
+  for (const char* method : {"uavloc", "uavloc_anchored", "ekf", "anchor_track"}) {
+    INFO(method);
+    CHECK(report["test_common_windows"][method]["all"]["windows"].get<int>() == same);
+    CHECK(same <= report["test"][method]["all"]["windows"].get<int>());
+    CHECK(report["test_by_weather_common_windows"][method]["clear"]["all"] ==
+          report["test_common_windows"][method]["all"]);
+  }
   CHECK(Stage(report, "camera")["best_validation_loss"].get<double>() <
         Stage(report, "camera")["initial_validation_loss"].get<double>());
   const Json manifest = Json::parse(ReadFile(model + "/model.json"));
@@ -484,15 +496,15 @@ TEST_CASE("The default model: three modalities beat each single one on held-out 
   }
 }
 
-TEST_CASE("CLI: train --jobs 2 and mpirun simulate the episodes one job does, byte for byte",
-          "[sim][train][slow]") {
+TEST_CASE(
+    "CLI: train --jobs 2 and mpirun simulate the episodes one job does, byte for byte, and "
+    "extend a saved set exactly",
+    "[sim][train][slow]") {
   const std::string dir = TempDir("train-jobs");
-  // Three short episodes and one epoch a stage: this is about the episodes.
+  // Short episodes and one epoch a stage: this is about the episodes.
   const std::vector<std::string> common{"train",
                                         kDefault,
                                         "--quick",
-                                        "--episodes",
-                                        "3",
                                         "--episode-s",
                                         "4",
                                         "--config-set",
@@ -500,10 +512,11 @@ TEST_CASE("CLI: train --jobs 2 and mpirun simulate the episodes one job does, by
                                         "--config-set",
                                         "/stage2_max_epochs=1",
                                         "--quiet"};
-  const auto train = [&](const std::string& name, std::vector<std::string> extra,
-                         const std::string& launcher = "") {
+  // Trains into dir/NAME on the episodes file dir/DATA.bin.
+  const auto train = [&](const std::string& name, const std::string& data,
+                         std::vector<std::string> extra, const std::string& launcher = "") {
     std::vector<std::string> args = common;
-    args.insert(args.end(), {"--out", dir + "/" + name, "--data", dir + "/" + name + ".bin"});
+    args.insert(args.end(), {"--out", dir + "/" + name, "--data", dir + "/" + data + ".bin"});
     args.insert(args.end(), extra.begin(), extra.end());
     if (launcher.empty()) return RunCli(args);
     std::vector<std::string> argv{launcher,          "-np",   "2",   "--allow-run-as-root",
@@ -512,10 +525,10 @@ TEST_CASE("CLI: train --jobs 2 and mpirun simulate the episodes one job does, by
     argv.insert(argv.end(), args.begin(), args.end());
     return RunProgram(argv);
   };
-  const auto one = train("one", {"--jobs", "1"});
+  const auto one = train("one", "one", {"--episodes", "3", "--jobs", "1"});
   INFO(one.err);
   REQUIRE(one.exit_code == 0);
-  const auto two = train("two", {"--jobs", "2"});
+  const auto two = train("two", "two", {"--episodes", "3", "--jobs", "2"});
   INFO(two.err);
   REQUIRE(two.exit_code == 0);
   const std::string episodes = ReadFile(dir + "/one.bin");
@@ -531,11 +544,55 @@ TEST_CASE("CLI: train --jobs 2 and mpirun simulate the episodes one job does, by
 
   const std::string mpirun = FindOnPath("mpirun");
   if (mpirun.empty()) FAIL("mpirun is not on PATH (Debian: apt-get install openmpi-bin)");
-  const auto ranks = train("mpi", {"--jobs", "1"}, mpirun);
+  const auto ranks = train("mpi", "mpi", {"--episodes", "3", "--jobs", "1"}, mpirun);
   INFO("mpirun said: " << ranks.out << ranks.err);
   REQUIRE(ranks.exit_code == 0);
   CHECK(ReadFile(dir + "/mpi.bin") == episodes);
   CHECK(ReadFile(dir + "/mpi/uavloc.pt") == ReadFile(dir + "/one/uavloc.pt"));
+
+  // --episodes beyond what --data holds: the missing episodes are simulated
+  // (in this process, by two jobs, by two ranks) and the file becomes what a
+  // fresh simulation of all of them writes.
+  const auto five = train("five", "five", {"--episodes", "5"});
+  INFO(five.err);
+  REQUIRE(five.exit_code == 0);
+  const std::string all_five = ReadFile(dir + "/five.bin");
+  CHECK(all_five.size() > episodes.size());
+  int n = 0;
+  for (const std::vector<std::string>& how :
+       {std::vector<std::string>{"--jobs", "1"}, {"--jobs", "2"}, {"mpirun"}}) {
+    const std::string name = "extended" + std::to_string(n++);
+    INFO(name);
+    fs::copy_file(dir + "/one.bin", dir + "/" + name + ".bin");
+    const bool mpi = how.front() == "mpirun";
+    std::vector<std::string> extra{"--episodes", "5"};
+    if (!mpi) extra.insert(extra.end(), how.begin(), how.end());
+    const auto r = train(name, name, extra, mpi ? mpirun : "");
+    INFO(r.out << r.err);
+    REQUIRE(r.exit_code == 0);
+    CHECK(ReadFile(dir + "/" + name + ".bin") == all_five);
+    CHECK(ReadFile(dir + "/" + name + "/uavloc.pt") == ReadFile(dir + "/five/uavloc.pt"));
+  }
+  // Fewer than the file holds: its first ones (the model of the 3).
+  const auto first = train("first", "five", {"--episodes", "3"});
+  INFO(first.err);
+  REQUIRE(first.exit_code == 0);
+  CHECK(ReadFile(dir + "/first/uavloc.pt") == ReadFile(dir + "/one/uavloc.pt"));
+  CHECK(ReadFile(dir + "/five.bin") == all_five);
+  // Extending a set drawn with another seed or length would mix two sets:
+  // refused, naming the file, nothing written.
+  for (const std::vector<std::string>& wrong :
+       {std::vector<std::string>{"--seed", "2"}, {"--episode-s", "5"}}) {
+    std::vector<std::string> args{"train", kDefault,       "--quick", "--episodes",      "6",
+                                  "--out", dir + "/wrong", "--data",  dir + "/five.bin", "--quiet"};
+    args.insert(args.end(), wrong.begin(), wrong.end());
+    const auto r = RunCli(args);
+    INFO(r.err);
+    CHECK(r.exit_code == 2);
+    CHECK_THAT(r.err, Catch::Contains(dir + "/five.bin") && Catch::Contains("cannot extend"));
+    CHECK_FALSE(fs::exists(dir + "/wrong"));
+    CHECK(ReadFile(dir + "/five.bin") == all_five);
+  }
 
   CHECK(RunCli({"train", kDefault, "--jobs", "0"}).exit_code == 2);
 }

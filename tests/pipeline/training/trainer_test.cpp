@@ -424,6 +424,13 @@ TEST_CASE("Trainer: EvaluateModel scores the saved model on held-out episodes",
       REQUIRE(trained.rmse_m.count(key) == 1);
       CHECK(ev.rmse_m.at(key) == Approx(trained.rmse_m.at(key)).epsilon(1e-9));
       CHECK(ev.windows.at(key) == trained.windows.at(key));
+      // One squared error per counted window, adding up to the RMSE.
+      const auto& per_window = ev.squared_error_m2.at(key);
+      CHECK(per_window.size() == ev.windows.at(key));
+      double sum = 0.0;
+      for (const auto& [window, e] : per_window) sum += e;
+      CHECK(std::sqrt(sum / static_cast<double>(per_window.size())) ==
+            Approx(ev.rmse_m.at(key)).epsilon(1e-4));
     }
     // Every modality is seen in the first window.
     CHECK(ev.windows.at("all") == static_cast<std::size_t>(kWindows));
@@ -442,6 +449,31 @@ TEST_CASE("Trainer: EvaluateModel scores the saved model on held-out episodes",
     CHECK(none.windows.at("all") == 0);
     CHECK(std::isnan(none.rmse_m.at("all")));
   }
+}
+
+TEST_CASE("OnCommonWindows scores every method on the windows all of them counted", "[pipeline]") {
+  // A counted windows 0..2 of episode 0, B windows 1..3 and window 0 of
+  // episode 1: common are (0, 1) and (0, 2).
+  Evaluation a, b;
+  for (Evaluation* ev : {&a, &b}) {
+    ev->rmse_m = {{"all", 1.0}, {"camera", 1.0}};
+    ev->windows = {{"all", 3}, {"camera", 1}};
+  }
+  a.squared_error_m2["all"] = {{{0, 0}, 100.0}, {{0, 1}, 1.0}, {{0, 2}, 9.0}};
+  b.squared_error_m2["all"] = {{{0, 1}, 4.0}, {{0, 2}, 16.0}, {{0, 3}, 1.0}, {{1, 0}, 1.0}};
+  a.squared_error_m2["camera"] = {{{0, 0}, 1.0}};
+  b.squared_error_m2["camera"] = {{{1, 0}, 1.0}};
+  const auto common = OnCommonWindows({{"a", a}, {"b", b}});
+  REQUIRE(common.size() == 2);
+  CHECK(common.at("a").windows.at("all") == 2);
+  CHECK(common.at("b").windows.at("all") == 2);
+  CHECK(common.at("a").rmse_m.at("all") == Approx(std::sqrt((1.0 + 9.0) / 2)));
+  CHECK(common.at("b").rmse_m.at("all") == Approx(std::sqrt((4.0 + 16.0) / 2)));
+  CHECK(common.at("a").windows.at("camera") == 0);
+  CHECK(std::isnan(common.at("b").rmse_m.at("camera")));
+  // One method alone: its own windows.
+  CHECK(OnCommonWindows({{"a", a}}).at("a").rmse_m.at("all") ==
+        Approx(std::sqrt((100.0 + 1.0 + 9.0) / 3)));
 }
 
 TEST_CASE("Trainer: refuses a data set without training or validation episodes", "[pipeline]") {
