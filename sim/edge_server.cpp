@@ -50,7 +50,9 @@ void CheckManifestFits(const Scenario& s, const std::string& file, const std::st
 
 // Where the model departs from the paper's design (Secs. IV-V): the training
 // config's switches of our extensions, as "key=value"; empty, the paper's
-// design throughout; null for a model without a recorded config.
+// design throughout; null for a model without a recorded config. The
+// temporal regressor is not among them (a GRU, LSTM or TCN is the paper's
+// own baseline, Sec. VI): TemporalOf names it.
 core::Json ExtensionsOf(const pipeline::ModelManifest& m) {
   if (!m.training) return nullptr;
   const pipeline::TrainingConfig& t = *m.training;
@@ -63,6 +65,13 @@ core::Json ExtensionsOf(const pipeline::ModelManifest& m) {
   if (t.te_align_tau_origin != pipeline::TauOrigin::kClock)
     ext.push_back("te_align_tau_origin=window");
   return ext;
+}
+
+// The model's temporal regressor ("mamba", the paper's, or one of its
+// baselines); models without a recorded config predate the choice: "mamba".
+const char* TemporalOf(const pipeline::ModelManifest& m) {
+  return pipeline::TemporalKindName(m.training ? m.training->temporal
+                                               : pipeline::TemporalKind::kMamba);
 }
 
 // The trained model a scenario names, loaded for the run loop. Throws
@@ -94,6 +103,7 @@ std::unique_ptr<pipeline::UavLocModelFiles> LoadModel(const Scenario& s, const s
           {"same_layout", same_layout},
           {"heads", heads},
           {"extensions", ExtensionsOf(m)}};
+  info["temporal"] = TemporalOf(m);
   return model;
 }
 

@@ -38,6 +38,8 @@ void Visit(V& v, UavLocModelConfig& c) {
   v("d_state", c.d_state, Rule::Range(1, 4096));
   v("d_conv", c.d_conv, Rule::Range(1, 256));
   v("expand", c.expand, Rule::Range(1, 64));
+  v.Enum("temporal", c.temporal, TemporalKindNames());
+  v("tcn_kernel", c.tcn_kernel, Rule::Range(2, 64));
   v("anchored", c.anchored);
   v("anchor_features", c.anchor_features);
   v("candidate_offset_m", c.candidate_offset_m,
@@ -63,7 +65,7 @@ TeAlignConfig UavLocModelConfig::te_align() const {
   return t;
 }
 
-MambaRegressorOptions UavLocModelConfig::regressor() const {
+TemporalRegressorOptions UavLocModelConfig::regressor() const {
   MambaRegressorOptions r;
   r.input_dim = kModalityCount * latent_dim;  // Eq. (26): the concatenation
   r.output_dim = 3;
@@ -73,7 +75,8 @@ MambaRegressorOptions UavLocModelConfig::regressor() const {
   r.mamba.d_state = d_state;
   r.mamba.d_conv = d_conv;
   r.mamba.expand = expand;
-  return r;
+  // Sec. VI, Fig. 11: the baselines in the Mamba's place, of its size.
+  return MatchedTemporalOptions(temporal, r, tcn_kernel);
 }
 
 void UavLocModelConfig::Validate() const {
@@ -122,7 +125,7 @@ UavLocModelImpl::UavLocModelImpl(const UavLocModelConfig& config)
   madw = register_module("madw", Madw(kModalityCount, config_.latent_dim, config_.score_hidden));
   mica = register_module(
       "mica", Mica(kModalityCount, config_.latent_dim, config_.score_hidden, config_.lambda_init));
-  regressor = register_module("regressor", MambaRegressor(config_.regressor()));
+  regressor = register_module("regressor", TemporalRegressor(config_.regressor()));
   ResetState();
 }
 

@@ -1,10 +1,12 @@
 // The edge server's UAVLoc network (paper Sec. V, Fig. "data processing
 // network"): TE-Align -> MADW -> MICA -> concatenation [t^{c,f}, t^{l,f},
-// t^{r,f}] -> Mamba -> linear head -> 3-D position.
+// t^{r,f}] -> Mamba -> linear head -> 3-D position. The temporal regressor
+// is the paper's Mamba or, as data (`temporal`), one of the GRU, LSTM and TCN
+// it is compared against in Sec. VI, Fig. 11 (temporal_regressor.h).
 //
 // Training runs forward() on batches of window sequences already aligned by
 // TeAlign (StackWindows); online use calls Step() once per window and keeps
-// the Mamba state between calls. The network predicts the position
+// the regressor's state between calls. The network predicts the position
 // normalised as (p - centre) / scale (scale isotropic, so the normalised MSE
 // is the paper's L^loc of Eq. (28) up to the constant 1/scale^2); centre and
 // scale are part of the configuration.
@@ -26,9 +28,9 @@
 
 #include "pipeline/anchored/anchors.h"
 #include "pipeline/edge/madw.h"
-#include "pipeline/edge/mamba.h"
 #include "pipeline/edge/mica.h"
 #include "pipeline/edge/te_align.h"
+#include "pipeline/edge/temporal_regressor.h"
 
 namespace uavsim::pipeline {
 
@@ -51,6 +53,12 @@ struct UavLocModelConfig {
   int d_state = 16;
   int d_conv = 4;
   int expand = 2;
+  // The temporal regressor (absent from older sidecars: kMamba). The GRU,
+  // LSTM and TCN take `layers` and the width that matches the Mamba's
+  // parameter count at the sizes above (MatchedTemporalOptions); the TCN's
+  // kernel is tcn_kernel (absent: 3), its dilations 1, 2, 4, ...
+  TemporalKind temporal = TemporalKind::kMamba;
+  int tcn_kernel = 3;
   // The paper's head regresses the position from the Mamba output alone.
   // Anchored (pipeline/anchored/anchors.h): the anchor features join t^f at the Mamba
   // input, and the head gives logits over the window's valid candidates c_i
@@ -78,7 +86,7 @@ struct UavLocModelConfig {
   double position_scale_m = 1.0;
 
   TeAlignConfig te_align() const;
-  MambaRegressorOptions regressor() const;
+  TemporalRegressorOptions regressor() const;
   // Throws std::invalid_argument naming the field.
   void Validate() const;
 };
@@ -97,7 +105,7 @@ class UavLocModelImpl : public torch::nn::Module {
   // [B, K, M], 1 available, 0 missing; anchors (anchored models only, else
   // ignored): the windows' AnchorWindows as StackAnchors gives them. Returns
   // the normalised positions [B, K, 3]. Each sequence starts from a zero
-  // Mamba state. Throws c10::Error for wrong shapes or missing anchors. An
+  // regressor state. Throws c10::Error for wrong shapes or missing anchors. An
   // anchored model sets *log_weights (when given) to the log of the
   // hypotheses' weights [B, K, kHypotheses] (-inf: not allowed) and
   // *hypotheses to their positions [B, K, kHypotheses, 3].
@@ -109,7 +117,7 @@ class UavLocModelImpl : public torch::nn::Module {
   // -> t^f [N, M z].
   torch::Tensor Fuse(const torch::Tensor& latents, const torch::Tensor& mask);
 
-  // Online: TE-Align of one window, fusion, one Mamba step; returns the
+  // Online: TE-Align of one window, fusion, one regressor step; returns the
   // position in metres. Windows must come in increasing order of k. A gap of
   // up to kMaxGapWindows windows is stepped through as all-missing windows so
   // the state keeps the window clock; a longer gap restarts from a zero
@@ -134,7 +142,7 @@ class UavLocModelImpl : public torch::nn::Module {
 
   Madw madw{nullptr};
   Mica mica{nullptr};
-  MambaRegressor regressor{nullptr};
+  TemporalRegressor regressor{nullptr};
 
  private:
   torch::Tensor StepAligned(const AlignedWindow& window, const AnchorWindow& anchors);
@@ -154,7 +162,7 @@ class UavLocModelImpl : public torch::nn::Module {
   TeAlign te_align_;
   AnchorTracker tracker_;
   AnchorWindow last_anchors_;
-  MambaRegressorState state_;
+  TemporalState state_;
   std::optional<std::int64_t> last_window_;
 };
 TORCH_MODULE(UavLocModel);

@@ -68,6 +68,21 @@ struct EarlyStopping {
   bool Stop() const { return since_best >= patience; }
 };
 
+// The temporal regressor as progress lines name it.
+std::string RegressorLabel(TemporalKind kind) {
+  switch (kind) {
+    case TemporalKind::kMamba:
+      return "Mamba";
+    case TemporalKind::kGru:
+      return "GRU";
+    case TemporalKind::kLstm:
+      return "LSTM";
+    case TemporalKind::kTcn:
+      return "TCN";
+  }
+  return TemporalKindName(kind);
+}
+
 // The epochs of one stage: train an epoch, validate, keep (and checkpoint)
 // the best weights, stop when `patience` epochs bring no improvement; ends
 // with the best weights restored, in eval mode. Fills the report's epoch
@@ -506,8 +521,8 @@ UavLocModel TrainFusion(const std::vector<WindowSequence>& train,
       o.stage2_min_steps_per_epoch, 2 * windows / (k * static_cast<std::int64_t>(o.stage2_batch)));
   RunEpochs(
       *model, o.stage2_max_epochs, o.stage2_patience,
-      config.anchored ? "train stage 2: fusion + Mamba, anchored head"
-                      : "train stage 2: fusion + Mamba, paper head",
+      "train stage 2: fusion + " + RegressorLabel(config.temporal) +
+          (config.anchored ? ", anchored head" : ", paper head"),
       o.quiet,
       [&] {
         for (std::int64_t step = 0; step < steps; ++step) {
@@ -695,6 +710,7 @@ TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& o, const ModelM
   config.window_s = o.window_s;
   config.d_model = o.d_model;
   config.layers = o.layers;
+  config.temporal = o.temporal;
   config.lambda_init = o.mica_lambda_init;
   config.tau_origin = o.te_align_tau_origin;
   config.position_centre_m = norm.centre_m;

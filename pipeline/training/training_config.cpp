@@ -32,6 +32,7 @@ void Visit(V& v, TrainingConfig& c) {
   v("window_dropout", c.window_dropout, Rule::Probability());
   v("d_model", c.d_model, Rule::Range(1, 4096));
   v("layers", c.layers, Rule::Range(1, 64));
+  v.Enum("temporal", c.temporal, TemporalKindNames());
   v("mica_lambda_init", c.mica_lambda_init, Rule::Range(-1e3, 1e3));
   v.Enum("te_align_tau_origin", c.te_align_tau_origin,
          std::vector<std::pair<const char*, TauOrigin>>{{"window", TauOrigin::kWindow},

@@ -15,6 +15,7 @@
 #include <string>
 
 #include "pipeline/edge/te_align.h"
+#include "pipeline/edge/temporal_kind.h"
 #include "pipeline/node/ib_cc_config.h"
 #include "sim/core/json_io.h"
 
@@ -57,6 +58,10 @@ struct TrainingConfig {
   // Edge network sizes (paper silent; DESIGN.md: d_state 16, d_conv 4, expand 2).
   int d_model = 64;
   int layers = 2;
+  // The temporal regressor: the paper's Mamba or one of its Sec. VI
+  // baselines (GRU, LSTM, TCN), sized to the Mamba's parameter count at
+  // d_model and layers (UavLocModelConfig::temporal).
+  TemporalKind temporal = TemporalKind::kMamba;
   // MICA's λ^{m,n} at the start (paper Sec. VI: 0.5).
   double mica_lambda_init = 0.5;
   // TE-Align's τ from the window's start (ours) or the episode's clock (the
@@ -102,8 +107,8 @@ struct TrainingConfig {
 };
 
 // The JSON keys are the field names, except mixture_loss ("position_loss":
-// "mixture" | "mean"); camera_stereo_branches is "shared" | "two". Each rule is checked when
-// reading.
+// "mixture" | "mean"); camera_stereo_branches is "shared" | "two"; temporal "mamba" | "gru" |
+// "lstm" | "tcn". Each rule is checked when reading.
 template <class V>
 void Visit(V& v, TrainingConfig& c);
 

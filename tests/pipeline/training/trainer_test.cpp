@@ -16,6 +16,7 @@
 
 #include "pipeline/anchored/anchors.h"
 #include "pipeline/edge/edge_localizer.h"
+#include "pipeline/edge/uavloc_model.h"
 #include "pipeline/model_bundle.h"
 #include "pipeline/node/ib_model_io.h"
 #include "pipeline/node/node_encoder.h"
@@ -588,6 +589,28 @@ TEST_CASE("Trainer: the MLP bottleneck baseline trains, saves and loads as such"
   CHECK(files->encoder(Modality::kLidar).config().bottleneck == IbBottleneck::kMlp);
   // The baseline's code differs from the IB head's mu for the same input.
   CHECK(testing::ReadFile(dir + "/lidar.pt") != testing::ReadFile(TrainedOnce().dir + "/lidar.pt"));
+}
+
+TEST_CASE("Trainer: temporal = gru trains, saves and loads a GRU in the Mamba's place",
+          "[pipeline][slow]") {
+  // Sec. VI, Fig. 11: the same fusion, another temporal regressor.
+  const std::string dir = testing::TempDir("trainer-gru") + "/model";
+  TrainOptions o = Tiny();
+  o.temporal = TemporalKind::kGru;
+  o.anchored_head = false;
+  InitTorch(1, kSeed);
+  const TrainReport report = TrainUavLoc(Synthetic(), o, SomeManifest(), dir);
+  REQUIRE(report.stages.size() == 4);
+  CHECK(report.stages[3].best_validation_loss < report.stages[3].initial_validation_loss);
+  CHECK_THAT(testing::ReadFile(dir + "/uavloc.pt.json"), Catch::Contains("\"temporal\": \"gru\""));
+  const UavLocModel model = LoadUavLocModel(dir + "/uavloc.pt");
+  CHECK(model->regressor->kind() == TemporalKind::kGru);
+  CHECK_FALSE(model->regressor->recurrent.is_empty());
+  const ModelManifest m = ReadModelManifest(dir + "/model.json");
+  REQUIRE(m.training.has_value());
+  CHECK(m.training->temporal == TemporalKind::kGru);
+  REQUIRE(report.test.count("uavloc") == 1);
+  CHECK(std::isfinite(report.test.at("uavloc").rmse_m.at("all")));
 }
 
 TEST_CASE("Trainer: stage 1 leaves out observations of something other than the target",

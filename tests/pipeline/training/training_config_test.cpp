@@ -45,6 +45,7 @@ TrainingConfig AllChanged() {
   c.window_dropout = 0.05;
   c.d_model = 32;
   c.layers = 3;
+  c.temporal = TemporalKind::kTcn;
   c.mica_lambda_init = 0.25;
   c.te_align_tau_origin = TauOrigin::kClock;
   c.camera_stereo_branches = StereoBranches::kTwo;
@@ -140,6 +141,9 @@ TEST_CASE("TrainingConfig: unknown keys and bad values name the file, pointer, v
       Catch::StartsWith("t.json: /camera_stereo_branches: expected one of \"shared\", \"two\""));
   CHECK(ErrorOf(Json{{"camera_eye_pool_side", 3}}) ==
         "t.json: /camera_eye_pool_side: expected 0 (no pooling) or a divisor of 32, got 3");
+  CHECK_THAT(ErrorOf(Json{{"temporal", "transformer"}}),
+             Catch::StartsWith(
+                 "t.json: /temporal: expected one of \"mamba\", \"gru\", \"lstm\", \"tcn\""));
   CHECK_THAT(ErrorOf(Json{{"camera_roi_geometry", 1}}),
              Catch::StartsWith("t.json: /camera_roi_geometry: "));
 
