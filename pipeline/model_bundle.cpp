@@ -5,6 +5,7 @@
 #include <system_error>
 
 #include "pipeline/model_checksums.h"
+#include "pipeline/training/variants.h"
 #include "sim/core/atomic_file.h"
 #include "sim/core/error.h"
 #include "sim/core/json_io.h"
@@ -49,6 +50,11 @@ void Visit(V& v, ModelManifest& c) {
   }
   v.Check(!c.edge.empty() || !c.anchored_edge.empty(), "edge",
           "the model names no edge network (edge and anchored_edge are both empty)");
+  v("variant", c.variant);
+  v.Check(FindVariant(c.variant) != nullptr, "variant",
+          "expected one of " + VariantNames() + ", got \"" + c.variant + "\"");
+  v.Check(c.variant == "paper" || c.anchored_edge.empty(), "anchored_edge",
+          "only the paper variant has the anchored head, this model is \"" + c.variant + "\"");
   if constexpr (V::kReading) {
     if (v.Has("training")) v.Object("training", c.training.emplace());
   } else if (c.training) {

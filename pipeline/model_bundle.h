@@ -43,6 +43,9 @@ struct ModelManifest {
   // `edge`; Load serves it as `uavloc_anchored`).
   std::string edge = "uavloc.pt";
   std::string anchored_edge;
+  // The variant it is (pipeline/training/variants.h; absent: "paper"): the
+  // run loop serves its paper-layout head as the method VariantMethod(variant).
+  std::string variant = "paper";
   // How it was trained, every key resolved ("training"; absent in models
   // written before the training config existed).
   std::optional<TrainingConfig> training;

@@ -2,6 +2,7 @@
 // latent size, and which localization methods run (paper Secs. IV-V).
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -32,8 +33,30 @@ struct PipelineConfig {
   EkfConfig ekf;                // the classical baseline
 };
 
-// The method names a scenario may list.
+// The subset of modalities `bits` allows (bit m: Modality m), 1..7: "all"
+// (camera, LiDAR and radar), "camera+lidar", "camera+radar", "lidar+radar",
+// "camera", "lidar", "radar" (training reports and method names use them).
+// Throws std::invalid_argument outside 1..7.
+std::string ModalitySubsetName(int bits);
+inline constexpr int kModalitySubsets = 7;
+
+// The fixed method names a scenario may list. Beside them: each variant's
+// method (pipeline/training/variants.h: gru, no_mica, early_fusion, ...),
+// and any learned method (uavloc or a variant's) fed a subset of the
+// modalities as NAME[SUBSET], SUBSET one of camera, lidar, radar,
+// camera+lidar, camera+radar, lidar+radar, all (e.g. uavloc[camera+lidar];
+// uavloc_camera is uavloc[camera]).
 const std::vector<std::string>& KnownMethods();
+
+// A method name taken apart: the learned method it runs ("uavloc", a
+// variant's method; empty for anchor_track, ekf and uavloc_anchored) and
+// the modalities it is fed (bit m: Modality m; 7 all).
+struct MethodName {
+  std::string learned;
+  int modalities = 7;
+};
+// nullopt when `name` is not a method a scenario may list.
+std::optional<MethodName> ParseMethod(const std::string& name);
 
 template <class V>
 void Visit(V& v, PipelineConfig& c);

@@ -3,16 +3,19 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
+#include <iterator>
 
 #include "pipeline/anchored/geometric_anchor.h"
 #include "pipeline/model_checksums.h"
+#include "pipeline/pipeline_config.h"
 #include "pipeline/torch_runtime.h"
+#include "pipeline/training/trainer.h"
+#include "pipeline/training/variants.h"
 
 namespace uavsim::sim {
 namespace {
-
-const char* const kModalities[] = {"camera", "lidar", "radar"};
 
 const char* const kHowToTrain =
     "train one with `uavsim train SCENARIO.json --out DIR` and set /pipeline/model to DIR";
@@ -107,29 +110,132 @@ std::unique_ptr<pipeline::UavLocModelFiles> LoadModel(const Scenario& s, const s
   return model;
 }
 
-// Whether a method runs the paper's head (uavloc and its single-modality
-// ablations) or the anchored one.
-bool NeedsPaperHead(const std::string& method) {
-  return method == "uavloc" || method == "uavloc_camera" || method == "uavloc_lidar" ||
-         method == "uavloc_radar";
+// A listed method taken apart (the scenario was validated: it parses).
+pipeline::MethodName MethodOf(const std::string& method) {
+  return pipeline::ParseMethod(method).value_or(pipeline::MethodName{});
 }
 
-// Each method's edge head is in the model (`heads`): else a ConfigError
-// naming the scenario's /pipeline/methods entry.
+// The variant a learned method runs ("paper" for uavloc).
+std::string VariantOfMethod(const std::string& learned) {
+  return learned == "uavloc" ? "paper" : learned;
+}
+
+// Each method's edge head is in the model (`heads`), and uavloc is asked of
+// a paper-variant model: else a ConfigError naming the scenario's
+// /pipeline/methods entry.
 void RequireHeads(const Scenario& s, const std::string& file, const std::string& path,
-                  const pipeline::EdgeHeads& heads) {
+                  const pipeline::ModelManifest& m, const pipeline::EdgeHeads& heads) {
   for (std::size_t i = 0; i < s.pipeline.methods.size(); ++i) {
     const std::string& method = s.pipeline.methods[i];
-    const bool paper = NeedsPaperHead(method), anchored = method == "uavloc_anchored";
+    const std::string at = "/pipeline/methods/" + std::to_string(i);
+    const bool paper = MethodOf(method).learned == "uavloc", anchored = method == "uavloc_anchored";
+    if ((paper || anchored) && m.variant != "paper")
+      throw core::ConfigError(file, at,
+                              "the model " + path + " is the " + m.variant +
+                                  " variant, not the paper's pipeline: list it as method " +
+                                  pipeline::VariantMethod(m.variant));
     if ((paper && heads.paper.empty()) || (anchored && heads.anchored.empty()))
       throw core::ConfigError(
-          file, "/pipeline/methods/" + std::to_string(i),
+          file, at,
           "the model " + path + " has no " + (paper ? "paper" : "anchored") + " head for `" +
               method + "` (" + (paper ? "uavloc is the paper's pipeline since issue 19" : "") +
               (paper ? "; " : "") +
               "train both with `uavsim train SCENARIO.json --head both --out DIR` and set "
               "/pipeline/model to DIR)");
   }
+}
+
+// A part's sidecar as JSON without its note (which says how its model was
+// made, not what it is).
+core::Json PartWithoutNote(const std::string& path) {
+  core::Json j = core::LoadJsonFile(path);
+  if (j.is_object()) j.erase("note");
+  return j;
+}
+
+std::string FileBytes(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(f), {});
+}
+
+// Whether two models' nodes send the same latents: the same encoder weights
+// and configuration per modality.
+bool SameEncoders(const pipeline::ModelManifest& a, const std::string& a_path,
+                  const pipeline::ModelManifest& b, const std::string& b_path) {
+  namespace fs = std::filesystem;
+  const fs::path da = fs::path(a_path).parent_path(), db = fs::path(b_path).parent_path();
+  const std::string* pa[] = {&a.camera, &a.lidar, &a.radar};
+  const std::string* pb[] = {&b.camera, &b.lidar, &b.radar};
+  for (int m = 0; m < 3; ++m) {
+    const core::Json ja = PartWithoutNote((da / *pa[m]).string());
+    const core::Json jb = PartWithoutNote((db / *pb[m]).string());
+    if (ja != jb) return false;
+    // The weights file the sidecar names (ib_model_io.h: "weights").
+    if (!ja.contains("weights") || !ja["weights"].is_string()) return false;
+    const std::string w = ja["weights"].get<std::string>();
+    if (FileBytes((da / w).string()) != FileBytes((db / w).string())) return false;
+  }
+  return true;
+}
+
+// The models of the variants the scenario's methods run, by variant name,
+// other than the scenario's own model (`main`, at `main_path`): each the
+// folder beside it named FOLDER-VARIANT. Checked without loading weights:
+// it exists with valid checksums, is that variant, fits the scenario, and
+// its encoders are the scenario model's (the nodes run one encoder per
+// modality). Throws core::ConfigError naming the method's
+// /pipeline/methods entry.
+std::map<std::string, std::string> VariantModelPaths(const Scenario& s, const std::string& file,
+                                                     const pipeline::ModelManifest& main,
+                                                     const std::string& main_path) {
+  namespace fs = std::filesystem;
+  std::map<std::string, std::string> paths;
+  for (std::size_t i = 0; i < s.pipeline.methods.size(); ++i) {
+    const std::string learned = MethodOf(s.pipeline.methods[i]).learned;
+    if (learned.empty() || learned == "uavloc") continue;
+    const std::string variant = VariantOfMethod(learned);
+    if (variant == main.variant || paths.count(variant)) continue;
+    const std::string at = "/pipeline/methods/" + std::to_string(i);
+    const fs::path folder = fs::path(main_path).parent_path();
+    const std::string path = (fs::path(folder.string() + "-" + variant) / "model.json").string();
+    const std::string how = "train it with `uavsim train " + file + " --variant " + variant +
+                            " --encoders " + folder.string() + "`";
+    std::error_code ec;
+    if (!fs::is_regular_file(path, ec))
+      throw core::ConfigError(file, at,
+                              "no model of the " + variant + " variant at " + path + ": " + how);
+    pipeline::ModelManifest m;
+    try {
+      m = pipeline::ReadModelManifest(path);
+      pipeline::VerifyModelChecksums(fs::path(path).parent_path().string());
+    } catch (const core::ConfigError& e) {
+      throw core::ConfigError(file, at, std::string(e.what()) + " (" + how + ")");
+    }
+    if (m.variant != variant)
+      throw core::ConfigError(
+          file, at,
+          "the model " + path + " is the " + m.variant + " variant, not " + variant + ": " + how);
+    CheckManifestFits(s, file, path, m);
+    if (!SameEncoders(main, main_path, m, path))
+      throw core::ConfigError(file, at,
+                              "the model " + path + " has other encoders than /pipeline/model's " +
+                                  main_path + " (the nodes run one encoder per modality): " + how +
+                                  ", or run it as the scenario's model (/pipeline/model)");
+    paths[variant] = path;
+  }
+  return paths;
+}
+
+// A raw-variant model was trained on what the nodes send without
+// pre-processing: the scenario must send that.
+void RequireRawFits(const Scenario& s, const std::string& file, const std::string& path,
+                    const pipeline::ModelManifest& m) {
+  const auto& p = s.pipeline.preprocess;
+  if (m.variant == "raw" && !(p.CameraRaw() && p.LidarRaw() && p.RadarRaw()))
+    throw core::ConfigError(file, "/pipeline/preprocess/raw",
+                            "the model " + path +
+                                " is the raw variant, trained on data without pre-processing: "
+                                "set it to true");
 }
 
 }  // namespace
@@ -159,7 +265,7 @@ std::unique_ptr<pipeline::Ekf> MakeEkf(const Scenario& s) {
 bool NeedsTrainedModel(const Scenario& s) {
   const auto& m = s.pipeline.methods;
   return std::any_of(m.begin(), m.end(), [](const std::string& method) {
-    return NeedsPaperHead(method) || method == "uavloc_anchored";
+    return !MethodOf(method).learned.empty() || method == "uavloc_anchored";
   });
 }
 
@@ -178,7 +284,9 @@ void CheckTrainedModel(const Scenario& s, const std::string& file) {
                             std::string(e.what()) + " (" + kHowToTrain + ")");
   }
   CheckManifestFits(s, file, path, m);
-  RequireHeads(s, file, path, heads);
+  RequireRawFits(s, file, path, m);
+  RequireHeads(s, file, path, m, heads);
+  VariantModelPaths(s, file, m, path);
 }
 
 EdgeServer::EdgeServer(const Scenario& s, const std::string& scenario_file, bool quiet,
@@ -193,15 +301,28 @@ EdgeServer::EdgeServer(const Scenario& s, const std::string& scenario_file, bool
   if (!NeedsTrainedModel(s)) return;
   pipeline::InitTorch(1, s.seed);
   model_ = LoadModel(s, scenario_file, quiet, model_info_);
-  RequireHeads(s, scenario_file, model_->manifest_path(), model_->heads());
+  const pipeline::ModelManifest& main = model_->manifest();
+  RequireRawFits(s, scenario_file, model_->manifest_path(), main);
+  RequireHeads(s, scenario_file, model_->manifest_path(), main, model_->heads());
+  model_info_["variant"] = main.variant;
+  for (const auto& [variant, path] :
+       VariantModelPaths(s, scenario_file, main, model_->manifest_path())) {
+    variant_models_[variant] = pipeline::UavLocModelFiles::Load(path);
+    model_info_["variants"][variant] = path;
+  }
   if (Runs("uavloc")) uavloc_ = model_->LoadEdge(false);
   if (Runs("uavloc_anchored")) {
     uavloc_anchored_ = model_->LoadEdge(true);
     uavloc_anchored_->WaitForTrack(s.pipeline.uavloc_wait_for_track);
   }
-  for (const char* m : kModalities)
-    if (const std::string method = std::string("uavloc_") + m; Runs(method))
-      ablations_[method] = {*core::ModalityFromName(m), model_->LoadEdge(false)};
+  for (const std::string& method : s.pipeline.methods) {
+    const pipeline::MethodName name = MethodOf(method);
+    if (name.learned.empty() || method == "uavloc" || learned_.count(method)) continue;
+    const std::string variant = VariantOfMethod(name.learned);
+    const pipeline::UavLocModelFiles& files =
+        variant == main.variant ? *model_ : *variant_models_.at(variant);
+    learned_[method] = {name.modalities, files.LoadEdge(false)};
+  }
 }
 
 EdgeServer::~EdgeServer() = default;
@@ -228,6 +349,8 @@ std::vector<std::string> EdgeServer::SteeredMethods() const {
   if (uavloc_anchored_) steered.push_back("uavloc_anchored");
   if (anchor_track_) steered.push_back("anchor_track");
   if (ekf_) steered.push_back("ekf");
+  for (const auto& [method, learned] : learned_)
+    if (learned.modalities == pipeline::kModalitySubsets) steered.push_back(method);
   return steered;
 }
 
@@ -265,13 +388,13 @@ std::map<std::string, Eigen::Vector3d> EdgeServer::EstimateWindow(std::int64_t t
     // Windows up to k are done (an arrival stamped exactly at a passed
     // deadline would otherwise linger).
     pending_.erase(pending_.begin(), pending_.upper_bound(k));
-    for (auto& [method, ablation] : ablations_) {
+    for (auto& [method, learned] : learned_) {
       const auto timing = core::WallProfile::Measure(profile_, "edge/" + method);
-      pipeline::WindowInputs one;
-      one.window = k;
-      const int m = static_cast<int>(ablation.first);
-      one.frames[m] = inputs.frames[m];
-      if (const auto p = ablation.second->OnWindow(one)) estimated[method] = *p;
+      pipeline::WindowInputs fed;  // the modalities the method is fed
+      fed.window = k;
+      for (int m = 0; m < pipeline::kModalityCount; ++m)
+        if (learned.modalities & (1 << m)) fed.frames[m] = inputs.frames[m];
+      if (const auto p = learned.edge->OnWindow(fed)) estimated[method] = *p;
     }
     if (uavloc_) {
       const auto timing = core::WallProfile::Measure(profile_, "edge/uavloc");

@@ -13,6 +13,15 @@
 //   uavloc_camera, uavloc_lidar, uavloc_radar
 //                    another copy of it fed one modality's latents, each
 //                    with its own state (the paper's single-modality rows)
+//   NAME[SUBSET]     a learned method (uavloc or a variant) fed a subset of
+//                    the modalities, e.g. uavloc[camera+lidar] (Fig. 10)
+//   gru, tcn, no_mica, early_fusion, ...
+//                    a variant of the paper's pipeline (Sec. VI baselines and
+//                    ablations, pipeline/training/variants.h): the edge head
+//                    of the model folder beside /pipeline/model named
+//                    FOLDER-VARIANT (trained with `uavsim train --variant V
+//                    --encoders FOLDER`: the nodes' encoders are shared), or
+//                    of /pipeline/model itself when that model is the variant
 //   uavloc_anchored  our extension: the model's anchored head, which picks
 //                    among the nodes' geometric anchors (pipeline/anchored/)
 //   anchor_track     that head's anchor filter alone (anchor_track.h): no
@@ -116,9 +125,16 @@ class EdgeServer {
   std::unique_ptr<pipeline::EdgeLocalizer> uavloc_;           // the paper's head
   std::unique_ptr<pipeline::EdgeLocalizer> uavloc_anchored_;  // ours
   std::unique_ptr<pipeline::AnchorTrack> anchor_track_;
-  // Single-modality ablations: method -> (its modality, its edge network).
-  std::map<std::string, std::pair<core::Modality, std::unique_ptr<pipeline::EdgeLocalizer>>>
-      ablations_;
+  // The variants' models other than model_ (variant -> files): their edge
+  // heads run on the latents of model_'s encoders, which they share.
+  std::map<std::string, std::unique_ptr<pipeline::UavLocModelFiles>> variant_models_;
+  // The learned methods other than uavloc: the modalities each is fed (bit
+  // m: Modality m) and its own edge network (a copy, with its own state).
+  struct Learned {
+    int modalities = 7;
+    std::unique_ptr<pipeline::EdgeLocalizer> edge;
+  };
+  std::map<std::string, Learned> learned_;
   std::map<std::int64_t, pipeline::WindowInputs> pending_;           // window k -> latents arrived
   std::map<std::int64_t, pipeline::WindowAnchors> pending_anchors_;  // for anchor_track
   core::WallProfile* profile_ = nullptr;

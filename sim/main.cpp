@@ -171,7 +171,9 @@ const char* kTrainHelp =
     "                 camera_stereo_branches (shared|two)\n"
     "                 camera_eye_pool_side camera_roi_geometry selection_weight\n"
     "                 selection_radius_m filter_preference_m offset_calibration_radius_m\n"
-    "                 position_loss (mixture|mean); scenarios/training/paper.json is the\n"
+    "                 position_loss (mixture|mean) alignment (te_align|first|middle|random)\n"
+    "                 madw mica fusion (uavloc|early|late|hemis);\n"
+    "                 scenarios/training/paper.json is the\n"
     "                 paper's preset (learning rate 1e-4, its camera encoder)\n"
     "  --config-set P=V  override the training config's value at JSON pointer P\n"
     "  --quick        a small model in under 3 minutes (17 dry episodes of 10 s; fewer\n"
@@ -180,7 +182,8 @@ const char* kTrainHelp =
     "  --episode-s S  simulated seconds each (default 20)\n"
     "  --seed N       seeds the episodes, the split and the weights (default 1)\n"
     "  --bottleneck B ib (default: the paper's IB-CC head, mu/sigma and KL) or mlp (its\n"
-    "                 MLP baseline of equal depth and parameter count, no KL)\n"
+    "                 MLP baseline of equal depth and parameter count, no KL): the same as\n"
+    "                 --variant mlp_bottleneck\n"
     "  --head H       the edge heads to train on the same encoders: both (default), paper\n"
     "                 (the paper's linear head: method uavloc) or anchored (ours: the Mamba\n"
     "                 output picks among the nodes' geometric anchors; uavloc_anchored)\n"
@@ -199,11 +202,28 @@ const char* kTrainHelp =
     "                 with --episodes N, the first N of FILE, and when FILE holds fewer\n"
     "                 (made with the same scenario and seed) the missing ones are\n"
     "                 simulated and FILE extended: the same set as a fresh simulation\n"
+    "  --variant V    a baseline or ablation of the paper's Sec. VI (list below): its\n"
+    "                 training keys apply before --config; the model (default folder\n"
+    "                 models/NAME-V) runs in the loop as method V (paper: uavloc)\n"
+    "  --encoders DIR reuse the stage-1 encoders of the model DIR (same scenario, a variant\n"
+    "                 that shares them): only stage 2 is trained\n"
     "  --set P=V      override the scenario's value at JSON pointer P\n"
     "  --force        replace an existing MODEL folder\n"
     "\n"
     "--lr, --selection-weight, --filter-preference, --offset-calibration, --plateau,\n"
     "--position-loss and --label-gate were replaced by training config keys (issue 17).\n";
+
+// The variants' section of `uavsim train --help`, from the list itself.
+std::string TrainVariantsHelp() {
+  std::string out =
+      "\nvariants (--variant; the paper's Sec. VI; each runs in the loop as a method):\n";
+  for (const uavsim::pipeline::Variant& v : uavsim::pipeline::Variants()) {
+    char line[256];
+    std::snprintf(line, sizeof line, "  %-16s %s (%s)\n", v.name, v.description, v.figure);
+    out += line;
+  }
+  return out;
+}
 
 const char* kBenchHelp =
     "usage: uavsim bench [raycast|radar|events|link|beam|pipeline|noise|all] [--quiet]\n"
@@ -428,9 +448,9 @@ const std::map<std::string, std::string>& ReplacedTrainFlags() {
 
 int Train(int argc, char** argv) {
   std::set<std::string> value_options{
-      "--out",    "--seed",       "--episodes", "--episode-s",     "--threads",
-      "--jobs",   "--set",        "--data",     "--bottleneck",    "--head",
-      "--config", "--config-set", "--split",    "--train-episodes"};
+      "--out",   "--seed",           "--episodes",   "--episode-s", "--threads", "--jobs",
+      "--set",   "--data",           "--bottleneck", "--head",      "--config",  "--config-set",
+      "--split", "--train-episodes", "--variant",    "--encoders"};
   const auto refuse_replaced = [](const std::string& flag) {
     const auto it = ReplacedTrainFlags().find(flag);
     if (it == ReplacedTrainFlags().end()) return;
@@ -446,7 +466,7 @@ int Train(int argc, char** argv) {
   if (argc > 2) refuse_replaced(argv[argc - 1]);
   const ParsedArgs a =
       Parse("train", argc, argv, 2, value_options, {"--quick", "--quiet", "--force", "--help"});
-  if (a.Has("--help")) return std::cout << kTrainHelp, kExitOk;
+  if (a.Has("--help")) return std::cout << kTrainHelp << TrainVariantsHelp(), kExitOk;
   for (const auto& [flag, keys] : ReplacedTrainFlags())
     if (a.Has(flag)) refuse_replaced(flag);
   const std::string& file = OneScenario("train", a);
@@ -465,16 +485,40 @@ int Train(int argc, char** argv) {
     c.jobs = static_cast<int>(UnsignedOption("train", "--jobs", *v, 1024));
   if (auto v = a.Value("--episode-s"))
     c.episode_s = NumberOption("train", "--episode-s", *v, 1.0, 3600.0, "seconds from 1 to 3600");
+  // --bottleneck mlp is the older spelling of --variant mlp_bottleneck.
+  const bool mlp_flag = a.Value("--bottleneck") && *a.Value("--bottleneck") == "mlp";
+  const std::string variant_name =
+      a.Value("--variant").value_or(mlp_flag ? "mlp_bottleneck" : "paper");
+  const uavsim::pipeline::Variant* variant = uavsim::pipeline::FindVariant(variant_name);
+  if (!variant)
+    throw UsageError("uavsim train: --variant expects one of " + uavsim::pipeline::VariantNames() +
+                     ", got '" + variant_name + "'");
+  c.variant = variant_name;
+  c.mlp_bottleneck = variant->mlp_bottleneck;
+  if (variant_name != "paper") c.anchored_head = false;  // ours extends the paper's design only
+  if (variant_name != "paper" && a.Value("--head") && *a.Value("--head") != "paper")
+    throw UsageError("uavsim train: --variant " + variant_name +
+                     " trains the paper's head only (--head paper); the anchored head "
+                     "extends the paper variant");
+  if (a.Value("--bottleneck") && variant->mlp_bottleneck != mlp_flag)
+    throw UsageError("uavsim train: --bottleneck " + *a.Value("--bottleneck") +
+                     " contradicts --variant " + variant_name +
+                     " (--bottleneck mlp is --variant mlp_bottleneck)");
+  if (auto v = a.Value("--encoders")) {
+    if (!variant->shares_encoders())
+      throw UsageError("uavsim train: --variant " + variant_name +
+                       " changes what the nodes send: it trains its own encoders (no --encoders)");
+    c.encoders_dir = *v;
+  }
   if (auto v = a.Value("--bottleneck")) {
     if (*v != "ib" && *v != "mlp")
       throw UsageError("uavsim train: --bottleneck expects ib or mlp, got '" + *v + "'");
-    c.mlp_bottleneck = *v == "mlp";
   }
   if (auto v = a.Value("--head")) {
     if (*v != "anchored" && *v != "paper" && *v != "both")
       throw UsageError("uavsim train: --head expects both, paper or anchored, got '" + *v + "'");
     c.paper_head = *v != "anchored";
-    c.anchored_head = *v != "paper";
+    c.anchored_head = *v != "paper" && variant_name == "paper";
   }
   if (auto v = a.Value("--split")) {
     if (*v != "trajectory" && *v != "frame")
@@ -492,11 +536,13 @@ int Train(int argc, char** argv) {
   const auto config_sets = a.values.find("--config-set");
   c.training = uavsim::sim::ResolveTrainingConfig(
       c.quick, a.Value("--config").value_or(""),
-      config_sets == a.values.end() ? std::vector<std::string>{} : config_sets->second);
+      config_sets == a.values.end() ? std::vector<std::string>{} : config_sets->second, variant);
   c.command_line = "uavsim";
   for (int i = 1; i < argc; ++i) c.command_line += " " + std::string(argv[i]);
-  const uavsim::sim::Scenario s = uavsim::sim::LoadScenario(file, Overrides(a));
-  c.out_dir = a.Value("--out").value_or("models/" + s.name);
+  uavsim::sim::Scenario s = uavsim::sim::LoadScenario(file, Overrides(a));
+  if (variant->raw) s.pipeline.preprocess.raw = true;  // the nodes' "without preprocessing"
+  c.out_dir = a.Value("--out").value_or("models/" + s.name +
+                                        (variant_name == "paper" ? "" : "-" + variant_name));
   const std::optional<uavsim::pipeline::TrainReport> report = uavsim::sim::RunTraining(s, c);
   if (!report) return kExitOk;  // an MPI rank that only simulated episodes
   const uavsim::pipeline::TrainReport& r = *report;
@@ -509,6 +555,12 @@ int Train(int argc, char** argv) {
     for (const auto& [method, ev] : r.test) {
       std::printf("held-out RMSE of %s (m):", method.c_str());
       for (const auto& [k, v] : ev.rmse_m) std::printf(" %s %.3f", k.c_str(), v);
+      std::printf("\n");
+    }
+    if (!r.test_decoder.empty()) {
+      std::printf("held-out RMSE of each node's IB decoder alone, no fusion (m):");
+      for (const auto& [modality, d] : r.test_decoder)
+        std::printf(" %s %.3f (%zu obs.)", modality.c_str(), d.rmse_m, d.observations);
       std::printf("\n");
     }
     if (r.test_common.size() > 1) {

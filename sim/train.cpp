@@ -373,13 +373,45 @@ TrainDefaults Defaults(bool quick) {
 }
 
 pipeline::TrainingConfig ResolveTrainingConfig(bool quick, const std::string& config_file,
-                                               const std::vector<std::string>& overrides) {
+                                               const std::vector<std::string>& overrides,
+                                               const pipeline::Variant* variant) {
   core::Json doc = core::Json::object();
   if (!config_file.empty()) doc = core::LoadJsonFile(config_file);
   const std::string name = config_file.empty() ? "--config-set" : config_file;
   for (const std::string& o : overrides) ApplyOverride(doc, o, name);
-  return pipeline::TrainingConfigFromJson(doc, name, Defaults(quick).training);
+  pipeline::TrainingConfig base = Defaults(quick).training;
+  if (variant) base = pipeline::ApplyVariant(*variant, base);
+  return pipeline::TrainingConfigFromJson(doc, name, base);
 }
+
+namespace {
+
+// --encoders DIR: a model of this scenario whose encoders other variants can
+// use. Throws core::UsageError naming DIR.
+void CheckEncoderSource(const Scenario& base, const TrainCommand& c) {
+  const std::string path = pipeline::ModelManifestPath(c.encoders_dir);
+  pipeline::ModelManifest m;
+  try {
+    m = pipeline::ReadModelManifest(path);
+  } catch (const std::exception& e) {
+    throw core::UsageError("uavsim train: --encoders " + c.encoders_dir + ": " + e.what());
+  }
+  const pipeline::Variant* v = pipeline::FindVariant(m.variant);
+  if (!v || !v->shares_encoders())
+    throw core::UsageError("uavsim train: --encoders " + c.encoders_dir + " is the " + m.variant +
+                           " variant, whose nodes send other latents: give a model of a variant "
+                           "that shares them (e.g. paper)");
+  if (m.scenario != base.name || m.layout_hash != LayoutHash(base))
+    throw core::UsageError("uavsim train: --encoders " + c.encoders_dir +
+                           " was trained for scenario \"" + m.scenario +
+                           "\" (or another layout), this is \"" + base.name + "\"");
+  if (m.latent_dim != base.pipeline.latent_dim)
+    throw core::UsageError("uavsim train: --encoders " + c.encoders_dir + " sends latents of " +
+                           std::to_string(m.latent_dim) + " values, the scenario asks for " +
+                           std::to_string(base.pipeline.latent_dim));
+}
+
+}  // namespace
 
 std::optional<pipeline::TrainReport> RunTraining(const Scenario& base, const TrainCommand& c) {
   EpisodePlan plan = Defaults(c.quick).plan;
@@ -397,6 +429,9 @@ std::optional<pipeline::TrainReport> RunTraining(const Scenario& base, const Tra
   };
   t.paper_head = c.paper_head;
   t.anchored_head = c.anchored_head;
+  t.method = pipeline::VariantMethod(c.variant);
+  t.encoders_from = c.encoders_dir;
+  if (!c.encoders_dir.empty()) CheckEncoderSource(base, c);
   if (c.episodes > 0) plan.episodes = c.episodes;
   if (c.episode_s > 0) plan.episode_s = c.episode_s;
 
@@ -472,10 +507,12 @@ std::optional<pipeline::TrainReport> RunTraining(const Scenario& base, const Tra
 
   pipeline::ModelManifest manifest;
   manifest.scenario = base.name;
+  manifest.variant = c.variant;
   manifest.layout_hash = LayoutHash(base);
   manifest.note = "trained by `" + c.command_line + "` (seed " + std::to_string(c.seed) + ", " +
                   std::to_string(plan.episodes) + " episodes of " +
-                  core::FormatNumber(plan.episode_s) + " s, split " + split + ")";
+                  core::FormatNumber(plan.episode_s) + " s, split " + split +
+                  (c.encoders_dir.empty() ? "" : "; stage-1 encoders from " + c.encoders_dir) + ")";
   pipeline::InitTorch(c.threads, c.seed);  // reseed: the weights do not depend on the simulation
   const pipeline::TrainReport report =
       pipeline::TrainUavLoc(data, t, manifest, dir->StagingPath("."));

@@ -14,6 +14,7 @@
 #include "pipeline/training/dataset.h"
 #include "pipeline/training/trainer.h"
 #include "pipeline/training/training_config.h"
+#include "pipeline/training/variants.h"
 #include "sim/scenario.h"
 
 namespace boost::mpi {
@@ -101,8 +102,11 @@ TrainDefaults Defaults(bool quick);
 // file `config_file` (if not empty), then the "/json/pointer=value"
 // overrides (as for scenarios, ApplyOverride). Throws core::ConfigError
 // naming the file (or --config-set) and the pointer.
+// A variant's keys (`variant`, pipeline/training/variants.h; null: none) go
+// between the defaults and the file.
 pipeline::TrainingConfig ResolveTrainingConfig(bool quick, const std::string& config_file,
-                                               const std::vector<std::string>& overrides = {});
+                                               const std::vector<std::string>& overrides = {},
+                                               const pipeline::Variant* variant = nullptr);
 
 struct TrainCommand {
   std::string scenario_file;
@@ -114,8 +118,16 @@ struct TrainCommand {
   int episodes = 0;             // 0: the plan's default
   double episode_s = 0.0;       // 0: the plan's default
   bool mlp_bottleneck = false;  // the paper's MLP baseline instead of the IB head
-  bool paper_head = true;       // train the paper's linear edge head (uavloc)
-  bool anchored_head = true;    // train our anchored edge head (uavloc_anchored)
+  // The variant trained (pipeline/training/variants.h): recorded in the
+  // model, its method named in the report. Its training keys are already in
+  // `training`, its node-side choices in mlp_bottleneck and the scenario.
+  std::string variant = "paper";
+  // A model folder whose stage-1 encoders to reuse (stage 2 only); empty:
+  // train them. Must be a model of the same scenario whose variant shares
+  // encoders (not mlp_bottleneck or raw); core::UsageError naming it else.
+  std::string encoders_dir;
+  bool paper_head = true;     // train the paper's linear edge head (uavloc)
+  bool anchored_head = true;  // train our anchored edge head (uavloc_anchored)
   pipeline::DataSplit split = pipeline::DataSplit::kTrajectory;
   // Train on the first N episodes of the training part only (0: all); the
   // validation and test parts stay whole (learning curves on one test set).

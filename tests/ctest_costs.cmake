@@ -10,7 +10,8 @@ foreach(entry
     "CLI: train --quick learns, is deterministic, and its model runs in the loop=300"
     "The default model: three modalities beat each single one on held-out trajectories=115"
     "CLI: train --jobs 2 and mpirun simulate the episodes one job does, byte for byte, and extend a saved set exactly=150"
-    "Kill: training killed at random moments leaves no half-written model or data=90")
+    "Kill: training killed at random moments leaves no half-written model or data=90"
+    "CLI: train --variant trains a variant on shared encoders that runs in the loop under its name and on modality subsets=60")
   string(FIND "${entry}" "=" at REVERSE)
   string(SUBSTRING "${entry}" 0 ${at} name)
   math(EXPR from "${at} + 1")

@@ -26,6 +26,32 @@ std::int64_t FloorDiv(std::int64_t a, std::int64_t b) {
 
 }  // namespace
 
+const std::vector<std::pair<const char*, Alignment>>& AlignmentNames() {
+  static const std::vector<std::pair<const char*, Alignment>> names = {
+      {"te_align", Alignment::kTeAlign},
+      {"first", Alignment::kFirst},
+      {"middle", Alignment::kMiddle},
+      {"random", Alignment::kRandom}};
+  return names;
+}
+
+const char* AlignmentName(Alignment a) {
+  for (const auto& [name, value] : AlignmentNames())
+    if (value == a) return name;
+  return "?";
+}
+
+std::size_t RandomFrameIndex(std::int64_t k, int m, std::size_t n) {
+  if (n == 0) throw std::invalid_argument("RandomFrameIndex: no frame to pick from");
+  // SplitMix64 of (k, m): a fixed, well-mixed draw per window and modality.
+  std::uint64_t x =
+      static_cast<std::uint64_t>(k) * 4 + static_cast<std::uint64_t>(m) + 0x9E3779B97F4A7C15ull;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+  x ^= x >> 31;
+  return static_cast<std::size_t>(x % n);
+}
+
 void TeAlignConfig::Validate() const {
   if (latent_dim < 2 || latent_dim % 2 != 0 || latent_dim > 4096)
     throw std::invalid_argument("TeAlign: latent_dim (" + std::to_string(latent_dim) +
@@ -88,8 +114,7 @@ AlignedWindow TeAlign::Align(const WindowInputs& window) const {
   AlignedWindow out;
   out.window = window.window;
   for (int m = 0; m < kModalityCount; ++m) {
-    std::vector<double> sum(z, 0.0);
-    int count = 0;
+    std::vector<const LatentFrame*> in_window;
     for (const LatentFrame& frame : window.frames[static_cast<std::size_t>(m)]) {
       if (frame.latent.size() != z)
         throw std::invalid_argument("TeAlign: latent of modality " + std::to_string(m) + " has " +
@@ -103,14 +128,30 @@ AlignedWindow TeAlign::Align(const WindowInputs& window) const {
         ++out.frames_outside_window;
         continue;
       }
-      const std::vector<double> e = Encoding(Tau(frame.t_s, window.window));
-      for (std::size_t j = 0; j < z; ++j) sum[j] += static_cast<double>(frame.latent[j]) + e[j];
-      ++count;
+      in_window.push_back(&frame);
     }
     std::vector<float>& pooled = out.latent[static_cast<std::size_t>(m)];
     pooled.assign(z, 0.0f);
-    out.mask[static_cast<std::size_t>(m)] = count > 0 ? 1.0f : 0.0f;
-    if (count == 0) continue;
+    out.mask[static_cast<std::size_t>(m)] = in_window.empty() ? 0.0f : 1.0f;
+    if (in_window.empty()) continue;
+    if (config_.alignment != Alignment::kTeAlign) {
+      // Sec. VI, Fig. 12: one frame of the window, as it is.
+      std::stable_sort(in_window.begin(), in_window.end(),
+                       [](const LatentFrame* a, const LatentFrame* b) { return a->t_s < b->t_s; });
+      const std::size_t n = in_window.size();
+      const std::size_t i = config_.alignment == Alignment::kFirst ? 0
+                            : config_.alignment == Alignment::kMiddle
+                                ? n / 2
+                                : RandomFrameIndex(window.window, m, n);
+      pooled = in_window[i]->latent;
+      continue;
+    }
+    std::vector<double> sum(z, 0.0);
+    for (const LatentFrame* frame : in_window) {
+      const std::vector<double> e = Encoding(Tau(frame->t_s, window.window));  // Eq. (19)
+      for (std::size_t j = 0; j < z; ++j) sum[j] += static_cast<double>(frame->latent[j]) + e[j];
+    }
+    const double count = static_cast<double>(in_window.size());  // Eq. (20)
     for (std::size_t j = 0; j < z; ++j) pooled[j] = static_cast<float>(sum[j] / count);
   }
   return out;

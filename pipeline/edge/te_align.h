@@ -6,7 +6,9 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "pipeline/anchored/geometric_anchor.h"
@@ -20,6 +22,24 @@ enum class TauOrigin {
   kClock,   // the simulated clock's zero, the run's (an episode's) start: the
             // paper's "timestamp of the i-th data frame"
 };
+
+// How a window's frames of one modality become one vector: TE-Align (the
+// paper's, Eqs. (19)-(20)) or one of the resampling baselines it is compared
+// against (Sec. VI, Fig. 12), which keep one frame's latent as it is (no time
+// encoding): the first, the middle or a random one of the modality's frames
+// stamped in the window, in time-stamp order. The middle of n frames is the
+// one at index floor(n / 2) (0-based: the later of the two middle ones when n
+// is even). The random pick is a hash of (window k, modality, n), the same in
+// every run, in training and in the loop (SplitMix64: RandomFrameIndex).
+enum class Alignment { kTeAlign, kFirst, kMiddle, kRandom };
+
+// The names in configuration files: "te_align", "first", "middle", "random".
+const std::vector<std::pair<const char*, Alignment>>& AlignmentNames();
+const char* AlignmentName(Alignment a);
+
+// The index in [0, n) RandomFrameIndex picks for window k and modality m
+// (n >= 1).
+std::size_t RandomFrameIndex(std::int64_t k, int m, std::size_t n);
 
 struct TeAlignConfig {
   int latent_dim = 16;     // z^m, the same for every modality; even (paper: 4 ... 64)
@@ -35,6 +55,8 @@ struct TeAlignConfig {
   // window (kWindow), so a window's encoding does not depend on how long the
   // run has gone (measured: README, "The paper's design and ours").
   TauOrigin tau_origin = TauOrigin::kWindow;
+  // TE-Align or a resampling baseline (see Alignment).
+  Alignment alignment = Alignment::kTeAlign;
 
   // Throws std::invalid_argument naming the field, its value and the rule.
   void Validate() const;
@@ -87,7 +109,8 @@ class TeAlign {
 
   // Eq. (20): t^{m,e}(k) = mean over i in s^m(k) of t_i^m + E_i^m.
   // Pools the frames of window.window, mask 1; a modality with no frame in
-  // the window gets a zero vector and mask 0. Frames stamped in another window
+  // the window gets a zero vector and mask 0. With a resampling `alignment`
+  // the chosen frame's latent instead (no encoding). Frames stamped in another window
   // are ignored and counted. Throws std::invalid_argument if a latent's size
   // is not z or it holds a non-finite value.
   AlignedWindow Align(const WindowInputs& window) const;

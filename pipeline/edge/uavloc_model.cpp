@@ -31,6 +31,14 @@ void Visit(V& v, UavLocModelConfig& c) {
   v.Enum("tau_origin", c.tau_origin,
          std::vector<std::pair<const char*, TauOrigin>>{{"window", TauOrigin::kWindow},
                                                         {"clock", TauOrigin::kClock}});
+  v.Enum("alignment", c.alignment, AlignmentNames());
+  v.Enum("fusion", c.fusion, FusionKindNames());
+  v("madw", c.madw);
+  v("mica", c.mica);
+  v.Check(c.fusion == FusionKind::kUavLoc || (c.madw && c.mica), "madw",
+          "MADW and MICA are the paper's fusion: a fusion baseline needs both true");
+  v.Check(c.fusion == FusionKind::kUavLoc || !c.anchored, "anchored",
+          "the anchored head extends the paper's fusion only");
   v("score_hidden", c.score_hidden, Rule::Range(1, 65536));
   v("lambda_init", c.lambda_init);
   v("d_model", c.d_model, Rule::Range(1, 65536));
@@ -62,12 +70,13 @@ TeAlignConfig UavLocModelConfig::te_align() const {
   t.kappa = kappa;
   t.time_unit_s = time_unit_s;
   t.tau_origin = tau_origin;
+  t.alignment = alignment;
   return t;
 }
 
 TemporalRegressorOptions UavLocModelConfig::regressor() const {
   MambaRegressorOptions r;
-  r.input_dim = kModalityCount * latent_dim;  // Eq. (26): the concatenation
+  r.input_dim = fused_dim();  // Eq. (26): the concatenation
   r.output_dim = 3;
   if (anchored) r.input_dim += kAnchorFeatures, r.output_dim = UavLocModelImpl::kHypotheses + 3 + 1;
   r.layers = layers;
@@ -79,12 +88,28 @@ TemporalRegressorOptions UavLocModelConfig::regressor() const {
   return MatchedTemporalOptions(temporal, r, tcn_kernel);
 }
 
+int UavLocModelConfig::fused_dim() const {
+  switch (fusion) {
+    case FusionKind::kLate:
+      return latent_dim;
+    case FusionKind::kHemis:
+      return 2 * HemisEmbedding(latent_dim);
+    default:
+      return kModalityCount * latent_dim;
+  }
+}
+
 void UavLocModelConfig::Validate() const {
   if (format != kUavLocModelFormat)
     throw std::invalid_argument("UavLocModel: format \"" + format + "\" is not \"" +
                                 kUavLocModelFormat + "\"");
   te_align().Validate();
   regressor().Validate();
+  if (fusion != FusionKind::kUavLoc && !(madw && mica))
+    throw std::invalid_argument("UavLocModel: madw and mica are the paper's fusion; fusion " +
+                                std::string(FusionKindName(fusion)) + " needs both true");
+  if (fusion != FusionKind::kUavLoc && anchored)
+    throw std::invalid_argument("UavLocModel: the anchored head extends the paper's fusion only");
   if (score_hidden < 1)
     throw std::invalid_argument("UavLocModel: score_hidden (" + std::to_string(score_hidden) +
                                 ") must be >= 1");
@@ -122,18 +147,80 @@ UavLocModelImpl::UavLocModelImpl(const UavLocModelConfig& config)
     : config_(Validated(config)),
       te_align_(config.te_align()),
       tracker_(config.window_s, config.position_centre_m, config.position_scale_m) {
-  madw = register_module("madw", Madw(kModalityCount, config_.latent_dim, config_.score_hidden));
-  mica = register_module(
-      "mica", Mica(kModalityCount, config_.latent_dim, config_.score_hidden, config_.lambda_init));
-  regressor = register_module("regressor", TemporalRegressor(config_.regressor()));
+  const int z = config_.latent_dim;
+  switch (config_.fusion) {
+    case FusionKind::kUavLoc:
+      if (config_.madw)
+        madw = register_module("madw", Madw(kModalityCount, z, config_.score_hidden));
+      if (config_.mica)
+        mica = register_module("mica",
+                               Mica(kModalityCount, z, config_.score_hidden, config_.lambda_init));
+      break;
+    case FusionKind::kEarly:
+    case FusionKind::kHemis: {
+      const int out = config_.fusion == FusionKind::kEarly ? z : HemisEmbedding(z);
+      projections = register_module("projections", torch::nn::ModuleList());
+      for (int m = 0; m < kModalityCount; ++m) projections->push_back(torch::nn::Linear(z, out));
+      break;
+    }
+    case FusionKind::kLate:
+      break;
+  }
+  if (config_.fusion == FusionKind::kLate) {
+    branches = register_module("branches", torch::nn::ModuleList());
+    for (int m = 0; m < kModalityCount; ++m)
+      branches->push_back(TemporalRegressor(config_.regressor()));
+    late_logits = register_parameter("late_logits", torch::zeros({kModalityCount}));
+  } else {
+    regressor = register_module("regressor", TemporalRegressor(config_.regressor()));
+  }
   ResetState();
 }
 
+torch::Tensor UavLocModelImpl::LateCombine(const torch::Tensor& positions,
+                                           const torch::Tensor& mask) const {
+  // Decision-level fusion: softmax of the learnable weights over the
+  // modalities available (MaskedSoftmax: 0 weight for missing ones).
+  const torch::Tensor w = MaskedSoftmax(late_logits.expand_as(mask), mask, -1);
+  return (w.unsqueeze(-1) * positions).sum(-2);
+}
+
 torch::Tensor UavLocModelImpl::Fuse(const torch::Tensor& latents, const torch::Tensor& mask) {
-  const MadwOutput weighted = madw(latents, mask);
-  const MicaOutput fused = mica(weighted.weighted, mask);
-  // Eq. (26): t^f(k) = [t^{c,f}(k), t^{l,f}(k), t^{r,f}(k)].
-  return fused.fused.flatten(1);
+  const torch::Tensor present = mask.unsqueeze(-1);
+  switch (config_.fusion) {
+    case FusionKind::kUavLoc: {
+      torch::Tensor x = madw ? madw(latents, mask).weighted : latents * present;  // Eq. (23)
+      if (mica) x = mica(x, mask).fused;                                          // Eq. (25)
+      // Eq. (26): t^f(k) = [t^{c,f}(k), t^{l,f}(k), t^{r,f}(k)].
+      return x.flatten(1);
+    }
+    case FusionKind::kEarly: {
+      std::vector<torch::Tensor> parts;
+      for (int m = 0; m < kModalityCount; ++m)
+        parts.push_back(
+            torch::relu(projections[static_cast<std::size_t>(m)]->as<torch::nn::Linear>()->forward(
+                latents.select(1, m))) *
+            present.select(1, m));
+      return torch::cat(parts, 1);
+    }
+    case FusionKind::kHemis: {
+      std::vector<torch::Tensor> parts;
+      for (int m = 0; m < kModalityCount; ++m)
+        parts.push_back(
+            torch::relu(projections[static_cast<std::size_t>(m)]->as<torch::nn::Linear>()->forward(
+                latents.select(1, m))));
+      const torch::Tensor e = torch::stack(parts, 1);  // [N, M, d]
+      // Mean and (population) variance over the available modalities; 0
+      // where none is.
+      const torch::Tensor n = mask.sum(1, true).clamp_min(1.0).unsqueeze(-1);  // [N, 1, 1]
+      const torch::Tensor mean = (e * present).sum(1, true) / n;
+      const torch::Tensor var = ((e - mean).square() * present).sum(1) / n.squeeze(1);
+      return torch::cat({mean.squeeze(1), var}, 1);
+    }
+    case FusionKind::kLate:
+      break;
+  }
+  return latents * present;
 }
 
 torch::Tensor UavLocModelImpl::forward(const torch::Tensor& latents, const torch::Tensor& mask,
@@ -148,9 +235,20 @@ torch::Tensor UavLocModelImpl::forward(const torch::Tensor& latents, const torch
               "UavLocModel: mask must be [B, K, ", kModalityCount, "], got ", mask.sizes());
   const int64_t batch = latents.size(0);
   const int64_t windows = latents.size(1);
-  torch::Tensor fused = Fuse(latents.reshape({batch * windows, kModalityCount, z}),
-                             mask.reshape({batch * windows, kModalityCount}).to(latents.dtype()))
-                            .reshape({batch, windows, kModalityCount * z});
+  const torch::Tensor flat_mask =
+      mask.reshape({batch * windows, kModalityCount}).to(latents.dtype());
+  torch::Tensor fused = Fuse(latents.reshape({batch * windows, kModalityCount, z}), flat_mask);
+  if (config_.fusion == FusionKind::kLate) {
+    // Each modality's branch on its own latents, then the decision weights.
+    fused = fused.reshape({batch, windows, kModalityCount, z});
+    std::vector<torch::Tensor> positions;
+    for (int m = 0; m < kModalityCount; ++m)
+      positions.push_back(branches[static_cast<std::size_t>(m)]->as<TemporalRegressor>()->forward(
+          fused.select(2, m)));
+    return LateCombine(torch::stack(positions, 2),
+                       flat_mask.reshape({batch, windows, kModalityCount}));
+  }
+  fused = fused.reshape({batch, windows, config_.fused_dim()});
   if (!config_.anchored) return regressor(fused);
   TORCH_CHECK(anchors != nullptr, "UavLocModel: an anchored model needs the windows' anchors");
   TORCH_CHECK(anchors->features.sizes() ==
@@ -202,8 +300,16 @@ torch::Tensor UavLocModelImpl::CorrectedCandidates(const torch::Tensor& candidat
          torch::from_blob(offset.data(), {kAnchorCandidates, 3}).to(candidates.dtype());
 }
 
+void UavLocModelImpl::ResetRegressors() {
+  if (regressor) state_ = regressor->InitialState(1);
+  branch_states_.clear();
+  if (branches)
+    for (const auto& b : *branches)
+      branch_states_.push_back(b->as<TemporalRegressor>()->InitialState(1));
+}
+
 void UavLocModelImpl::ResetState() {
-  state_ = regressor->InitialState(1);
+  ResetRegressors();
   last_window_.reset();
   tracker_.Reset();
   last_anchors_ = {};
@@ -221,6 +327,14 @@ torch::Tensor UavLocModelImpl::StepAligned(const AlignedWindow& window,
     std::copy(t.begin(), t.end(), latent_data + m * z);
     mask_data[m] = window.mask[static_cast<std::size_t>(m)];
   }
+  if (config_.fusion == FusionKind::kLate) {
+    const torch::Tensor masked = Fuse(latents, mask);  // [1, M, z]
+    std::vector<torch::Tensor> positions;
+    for (int m = 0; m < kModalityCount; ++m)
+      positions.push_back(branches[static_cast<std::size_t>(m)]->as<TemporalRegressor>()->Step(
+          masked.select(1, m), &branch_states_[static_cast<std::size_t>(m)]));
+    return LateCombine(torch::stack(positions, 1), mask);
+  }
   if (!config_.anchored) return regressor->Step(Fuse(latents, mask), &state_);
   const AnchorBatch a = StackAnchors({{anchors}});
   const torch::Tensor x = torch::cat({Fuse(latents, mask), a.features[0]}, 1);
@@ -237,7 +351,7 @@ Eigen::Vector3d UavLocModelImpl::Step(const WindowInputs& window) {
   if (last_window_) {
     const std::int64_t gap = window.window - *last_window_ - 1;
     if (gap > kMaxGapWindows) {
-      state_ = regressor->InitialState(1);
+      ResetRegressors();
     } else {
       AlignedWindow empty;
       for (auto& t : empty.latent) t.assign(static_cast<std::size_t>(config_.latent_dim), 0.0f);

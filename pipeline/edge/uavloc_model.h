@@ -27,6 +27,7 @@
 #include <vector>
 
 #include "pipeline/anchored/anchors.h"
+#include "pipeline/edge/fusion_kind.h"
 #include "pipeline/edge/madw.h"
 #include "pipeline/edge/mica.h"
 #include "pipeline/edge/te_align.h"
@@ -44,6 +45,15 @@ struct UavLocModelConfig {
   double kappa = 10000.0;
   double time_unit_s = 1e-3;
   TauOrigin tau_origin = TauOrigin::kWindow;  // absent from older sidecars: kWindow
+  // TE-Align or a resampling baseline (Fig. 12; absent: TE-Align).
+  Alignment alignment = Alignment::kTeAlign;
+  // The fusion (fusion_kind.h; absent: the paper's), and with it MADW and
+  // MICA each switchable (Fig. 13; off: t^{m,w} = t^{m,e} masked, and
+  // t^{m,f} = t^{m,w}). Only the paper's fusion has them: the baselines
+  // need both true.
+  FusionKind fusion = FusionKind::kUavLoc;
+  bool madw = true;
+  bool mica = true;
   // MADW and MICA (Table I: MLP_128; paper Sec. VI: λ initialised to 0.5).
   int score_hidden = 128;
   double lambda_init = 0.5;
@@ -86,7 +96,11 @@ struct UavLocModelConfig {
   double position_scale_m = 1.0;
 
   TeAlignConfig te_align() const;
+  // The regressor after the fusion (late fusion: each modality's branch).
   TemporalRegressorOptions regressor() const;
+  // The fusion's output per window: the regressor's input before any anchor
+  // features (late fusion: one modality's latent, z).
+  int fused_dim() const;
   // Throws std::invalid_argument naming the field.
   void Validate() const;
 };
@@ -113,8 +127,9 @@ class UavLocModelImpl : public torch::nn::Module {
                         const struct AnchorBatch* anchors = nullptr,
                         torch::Tensor* log_weights = nullptr, torch::Tensor* hypotheses = nullptr);
 
-  // MADW, MICA and concatenation of independent windows: [N, M, z], [N, M]
-  // -> t^f [N, M z].
+  // The fusion of independent windows: [N, M, z], [N, M] -> t^f [N,
+  // fused_dim()] (the paper's: MADW, MICA and concatenation, [N, M z]). Late
+  // fusion: the masked latents [N, M, z] (its fusion is of positions).
   torch::Tensor Fuse(const torch::Tensor& latents, const torch::Tensor& mask);
 
   // Online: TE-Align of one window, fusion, one regressor step; returns the
@@ -140,12 +155,24 @@ class UavLocModelImpl : public torch::nn::Module {
   // Anchored models: the anchors the last Step used (default before any).
   const AnchorWindow& last_anchors() const { return last_anchors_; }
 
+  // The paper's fusion (each null when switched off or for a baseline).
   Madw madw{nullptr};
   Mica mica{nullptr};
+  // Early fusion's and HeMIS's per-modality projections (else empty).
+  torch::nn::ModuleList projections{nullptr};
+  // The temporal regressor; null for late fusion, which has one per
+  // modality in `branches` and the decision weights' logits `late_logits`
+  // [M].
   TemporalRegressor regressor{nullptr};
+  torch::nn::ModuleList branches{nullptr};
+  torch::Tensor late_logits;
 
  private:
   torch::Tensor StepAligned(const AlignedWindow& window, const AnchorWindow& anchors);
+  void ResetRegressors();  // the temporal state(s) only
+  // Late fusion: positions [..., M, 3] of the branches and mask [..., M] ->
+  // the weighted position [..., 3] (0 where no modality is available).
+  torch::Tensor LateCombine(const torch::Tensor& positions, const torch::Tensor& mask) const;
   // The head's output [..., kHypotheses + 4] (logits, a, t) -> position
   // [..., 3] (anchored models). The candidate hypotheses are the
   // candidates less their offsets (CorrectedCandidates).
@@ -163,6 +190,7 @@ class UavLocModelImpl : public torch::nn::Module {
   AnchorTracker tracker_;
   AnchorWindow last_anchors_;
   TemporalState state_;
+  std::vector<TemporalState> branch_states_;  // late fusion
   std::optional<std::int64_t> last_window_;
 };
 TORCH_MODULE(UavLocModel);

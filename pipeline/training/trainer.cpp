@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 
 #include "pipeline/edge/te_align.h"
@@ -14,6 +15,7 @@
 #include "pipeline/node/ib_encoder.h"
 #include "pipeline/node/ib_model_io.h"
 #include "pipeline/node/ib_normalization.h"
+#include "pipeline/training/variants.h"
 #include "sim/core/json_io.h"
 #include "sim/core/progress.h"
 
@@ -521,8 +523,12 @@ UavLocModel TrainFusion(const std::vector<WindowSequence>& train,
       o.stage2_min_steps_per_epoch, 2 * windows / (k * static_cast<std::int64_t>(o.stage2_batch)));
   RunEpochs(
       *model, o.stage2_max_epochs, o.stage2_patience,
-      "train stage 2: fusion + " + RegressorLabel(config.temporal) +
-          (config.anchored ? ", anchored head" : ", paper head"),
+      "train stage 2: " +
+          (config.fusion == FusionKind::kUavLoc
+               ? std::string("fusion")
+               : FusionKindName(config.fusion) + std::string(" fusion")) +
+          " + " + RegressorLabel(config.temporal) +
+          (config.anchored ? ", anchored head" : ", " + o.method),
       o.quiet,
       [&] {
         for (std::int64_t step = 0; step < steps; ++step) {
@@ -608,6 +614,75 @@ std::vector<WindowSequence> AlignAll(const std::vector<Episode>& episodes,
   return out;
 }
 
+// TrainReport::test_decoder of the encoders on episodes.
+std::map<std::string, DecoderScore> DecoderScores(std::vector<IbCcModel>& encoders,
+                                                  const std::vector<Episode>& episodes,
+                                                  const TeAlign& align) {
+  torch::NoGradGuard no_grad;
+  std::map<std::string, DecoderScore> out;
+  for (int m = 0; m < kModalityCount; ++m) {
+    IbCcModel& model = encoders[static_cast<std::size_t>(m)];
+    model->eval();
+    const IbNormalization& n = model->config().normalization;
+    const std::vector<const Sample*> samples = SamplesOf(episodes, static_cast<Modality>(m), align);
+    double sum = 0.0;
+    for (std::size_t i = 0; i < samples.size(); i += 64) {
+      const std::vector<const Sample*> b(
+          samples.begin() + static_cast<std::ptrdiff_t>(i),
+          samples.begin() + static_cast<std::ptrdiff_t>(std::min(samples.size(), i + 64)));
+      const torch::Tensor y =
+          model->Decode(model->Encode(MakeInput(b, static_cast<Modality>(m), n)))
+              .to(torch::kFloat64)
+              .contiguous();
+      const double* p = y.data_ptr<double>();
+      for (std::size_t j = 0; j < b.size(); ++j)
+        sum += (DenormalizePosition({p[3 * j], p[3 * j + 1], p[3 * j + 2]}, n) - b[j]->truth_m)
+                   .squaredNorm();
+    }
+    DecoderScore& d = out[kPartNames[m]];
+    d.observations = samples.size();
+    d.rmse_m = samples.empty() ? std::numeric_limits<double>::quiet_NaN()
+                               : std::sqrt(sum / static_cast<double>(samples.size()));
+  }
+  return out;
+}
+
+// The stage-1 encoders of a saved model (TrainOptions::encoders_from).
+std::vector<IbCcModel> LoadEncoders(const std::string& model_path, int latent_dim,
+                                    std::optional<TrainingConfig>* trained_with) {
+  const std::string manifest_path = ModelManifestPath(model_path);
+  const ModelManifest m = ReadModelManifest(manifest_path);
+  VerifyModelChecksums(fs::path(manifest_path).parent_path().string());
+  if (m.latent_dim != latent_dim)
+    throw std::invalid_argument("train: the encoders of " + manifest_path + " send " +
+                                std::to_string(m.latent_dim) + " values, training asks for " +
+                                std::to_string(latent_dim));
+  const fs::path folder = fs::path(manifest_path).parent_path();
+  std::vector<IbCcModel> encoders;
+  for (const std::string* name : {&m.camera, &m.lidar, &m.radar})
+    encoders.push_back(LoadIbCcModel((folder / *name).string()));
+  *trained_with = m.training;
+  return encoders;
+}
+
+// The stage-1 keys of `from` (how the encoders were trained) into `to`.
+void CopyStage1Keys(const TrainingConfig& from, TrainingConfig& to) {
+  to.dropout = from.dropout;
+  to.beta = from.beta;
+  to.stage1_lr = from.stage1_lr;
+  to.stage1_batch = from.stage1_batch;
+  to.stage1_max_epochs = from.stage1_max_epochs;
+  to.stage1_patience = from.stage1_patience;
+  to.stage1_min_samples_per_epoch = from.stage1_min_samples_per_epoch;
+  to.stage1_max_samples_per_epoch = from.stage1_max_samples_per_epoch;
+  to.stage1_max_validation_samples = from.stage1_max_validation_samples;
+  to.stage1_label_gate_m = from.stage1_label_gate_m;
+  to.stage1_label_gate_deg = from.stage1_label_gate_deg;
+  to.camera_stereo_branches = from.camera_stereo_branches;
+  to.camera_eye_pool_side = from.camera_eye_pool_side;
+  to.camera_roi_geometry = from.camera_roi_geometry;
+}
+
 core::Json EvaluationJson(const Evaluation& ev) {
   core::Json j = core::Json::object();
   for (const auto& [key, rmse] : ev.rmse_m)
@@ -649,17 +724,6 @@ std::map<std::string, Evaluation> OnCommonWindows(
   return out;
 }
 
-std::string ModalitySubsetName(int bits) {
-  if (bits < 1 || bits > kModalitySubsets)
-    throw std::invalid_argument("ModalitySubsetName: bits " + std::to_string(bits) +
-                                " is not in [1, 7]");
-  if (bits == kModalitySubsets) return "all";
-  std::string name;
-  for (int m = 0; m < kModalityCount; ++m)
-    if (bits & (1 << m)) name += (name.empty() ? "" : "+") + std::string(kPartNames[m]);
-  return name;
-}
-
 void TrainOptions::Validate() const {
   try {
     CheckTrainingConfig(*this, "TrainOptions");
@@ -672,6 +736,9 @@ void TrainOptions::Validate() const {
   require(latent_dim >= 2 && latent_dim % 2 == 0, "latent_dim", "must be even and >= 2");
   require(window_s > 0 && std::isfinite(window_s), "window_s", "must be > 0");
   require(paper_head || anchored_head, "paper_head", "or anchored_head must be set");
+  require(!anchored_head || fusion == FusionKind::kUavLoc, "anchored_head",
+          "extends the paper's fusion only (fusion \"uavloc\")");
+  require(!method.empty(), "method", "must name the method");
 }
 
 TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& o, const ModelManifest& manifest,
@@ -686,18 +753,23 @@ TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& o, const ModelM
                                     core::FormatNumber(e.window_s) + " s windows, training " +
                                     core::FormatNumber(o.window_s) + " s");
   torch::manual_seed(o.seed);
+  std::vector<IbCcModel> encoders;
+  std::optional<TrainingConfig> encoders_trained_with;
+  if (!o.encoders_from.empty())
+    encoders = LoadEncoders(o.encoders_from, o.latent_dim, &encoders_trained_with);
   std::vector<Eigen::Vector3d> positions;
   for (const Episode& e : data.train)
     positions.insert(positions.end(), e.window_truth.begin(), e.window_truth.end());
-  const IbNormalization norm = FitPositionNormalization(positions);
+  const IbNormalization norm = encoders.empty() ? FitPositionNormalization(positions)
+                                                : encoders.front()->config().normalization;
 
   const fs::path out(out_dir);
   const fs::path checkpoints = out / "checkpoints";
   fs::create_directories(checkpoints);
   TrainReport report;
   report.split = data.split;
-  std::vector<IbCcModel> encoders;
-  for (int m = 0; m < kModalityCount; ++m) {
+  report.encoders_from = o.encoders_from;
+  for (int m = 0; encoders.size() < kModalityCount; ++m) {
     StageReport stage;
     encoders.push_back(TrainEncoder(static_cast<Modality>(m), data, o, norm,
                                     (checkpoints / (std::string(kPartNames[m]) + ".json")).string(),
@@ -713,6 +785,10 @@ TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& o, const ModelM
   config.temporal = o.temporal;
   config.lambda_init = o.mica_lambda_init;
   config.tau_origin = o.te_align_tau_origin;
+  config.alignment = o.alignment;
+  config.fusion = o.fusion;
+  config.madw = o.madw;
+  config.mica = o.mica;
   config.position_centre_m = norm.centre_m;
   config.position_scale_m = norm.scale_m;
   const TeAlign align(config.te_align());
@@ -747,6 +823,8 @@ TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& o, const ModelM
   m.latent_dim = o.latent_dim;
   m.window_s = o.window_s;
   m.training = static_cast<const TrainingConfig&>(o);
+  // Stage 1 as the reused encoders were trained.
+  if (encoders_trained_with) CopyStage1Keys(*encoders_trained_with, *m.training);
   m.edge = o.paper_head ? "uavloc.pt" : "";
   m.anchored_edge = o.anchored_head ? "uavloc_anchored.pt" : "";
   // Each head from the generator state stage 1 left (trained alone or
@@ -767,7 +845,7 @@ TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& o, const ModelM
     UavLocModel model = TrainFusion(train, val, head, o, (checkpoints / file).string(), stage);
     report.stages.push_back(stage);
     if (!test.empty()) {
-      const std::string method = anchored ? "uavloc_anchored" : "uavloc";
+      const std::string method = anchored ? "uavloc_anchored" : o.method;
       report.test[method] = Evaluate(model, test);
       for (const auto& [weather, indices] : test_weather) {
         std::vector<WindowSequence> part;
@@ -778,6 +856,7 @@ TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& o, const ModelM
     SaveUavLocModel(model, (out / file).string());
   }
 
+  if (!data.test.empty()) report.test_decoder = DecoderScores(encoders, data.test, align);
   report.test_common = OnCommonWindows(report.test);
   {
     std::map<std::string, std::map<std::string, Evaluation>> by_weather;  // weather -> method
@@ -816,14 +895,29 @@ std::map<std::string, Evaluation> EvaluateModel(const std::string& model_path,
   const EdgeHeads heads = ReadEdgeHeads(m, manifest_path);
   std::map<std::string, Evaluation> out;
   std::vector<WindowSequence> sequences;
-  for (const auto& [method, path] :
-       {std::pair{"uavloc", &heads.paper}, std::pair{"uavloc_anchored", &heads.anchored}}) {
+  const std::string paper_method = VariantMethod(m.variant);
+  for (const auto& [method, path] : {std::pair{paper_method.c_str(), &heads.paper},
+                                     std::pair{"uavloc_anchored", &heads.anchored}}) {
     if (path->empty()) continue;
     UavLocModel model = LoadUavLocModel(*path);
     if (sequences.empty()) sequences = AlignAll(episodes, encoders, model->te_align(), norm);
     out[method] = Evaluate(model, sequences);
   }
   return out;
+}
+
+std::map<std::string, DecoderScore> EvaluateDecoders(const std::string& model_path,
+                                                     const std::vector<Episode>& episodes) {
+  const std::string manifest_path = ModelManifestPath(model_path);
+  const ModelManifest m = ReadModelManifest(manifest_path);
+  const fs::path folder = fs::path(manifest_path).parent_path();
+  std::vector<IbCcModel> encoders;
+  for (const std::string* name : {&m.camera, &m.lidar, &m.radar})
+    encoders.push_back(LoadIbCcModel((folder / *name).string()));
+  TeAlignConfig windows;
+  windows.latent_dim = m.latent_dim;
+  windows.window_s = m.window_s;
+  return DecoderScores(encoders, episodes, TeAlign(windows));
 }
 
 std::string ReportJson(const TrainReport& r, const TrainOptions& o) {
@@ -846,6 +940,13 @@ std::string ReportJson(const TrainReport& r, const TrainOptions& o) {
     for (const Eigen::Vector3d& v : r.candidate_offset_m) offsets.push_back({v.x(), v.y(), v.z()});
     j["candidate_offset_m"] = offsets;
   }
+  j["method"] = o.method;
+  j["edge"] = {{"temporal", TemporalKindName(o.temporal)},
+               {"alignment", AlignmentName(o.alignment)},
+               {"fusion", FusionKindName(o.fusion)},
+               {"madw", o.madw},
+               {"mica", o.mica}};
+  if (!r.encoders_from.empty()) j["encoders_from"] = r.encoders_from;
   j["stage2_plateau_epochs"] = o.stage2_plateau_epochs;
   j["learning_rate"] = {{"stage1", o.stage1_lr}, {"stage2", o.stage2_lr}};
   j["stage1_label_gate"] = {{"m", o.stage1_label_gate_m}, {"deg", o.stage1_label_gate_deg}};
@@ -864,6 +965,12 @@ std::string ReportJson(const TrainReport& r, const TrainOptions& o) {
   core::Json test = core::Json::object();
   for (const auto& [method, ev] : r.test) test[method] = EvaluationJson(ev);
   j["test"] = test;
+  core::Json decoder = core::Json::object();
+  for (const auto& [modality, d] : r.test_decoder)
+    decoder[modality] = {
+        {"rmse_m", std::isfinite(d.rmse_m) ? core::Json(d.rmse_m) : core::Json(nullptr)},
+        {"observations", d.observations}};
+  j["test_decoder"] = decoder;
   core::Json by_weather = core::Json::object();
   for (const auto& [method, weathers] : r.test_by_weather)
     for (const auto& [weather, ev] : weathers) by_weather[method][weather] = EvaluationJson(ev);

@@ -25,6 +25,7 @@
 
 #include "pipeline/model_bundle.h"
 #include "pipeline/node/ib_cc_config.h"
+#include "pipeline/pipeline_config.h"
 #include "pipeline/training/dataset.h"
 #include "pipeline/training/training_config.h"
 
@@ -52,10 +53,7 @@ struct Evaluation {
 std::map<std::string, Evaluation> OnCommonWindows(
     const std::map<std::string, Evaluation>& by_method);
 
-// The subset of modalities `bits` allows (bit m: Modality m), 1..7, as named
-// in Evaluation.
-std::string ModalitySubsetName(int bits);
-inline constexpr int kModalitySubsets = 7;
+// ModalitySubsetName and kModalitySubsets: pipeline/pipeline_config.h.
 
 // What one training run needs: the tuning knobs (TrainingConfig, data read
 // from a config file) and what the caller decides per run.
@@ -71,6 +69,14 @@ struct TrainOptions : TrainingConfig {
   // anchored head (pipeline/anchored/anchors.h, measured in NOTES.md).
   bool paper_head = true;
   bool anchored_head = true;
+  // The method the paper-layout head is scored as in the report: "uavloc",
+  // or a variant's name (VariantMethod, variants.h).
+  std::string method = "uavloc";
+  // A model folder (or its model.json) whose stage-1 encoders to use instead
+  // of training them: stage 2 only, from a generator seeded with `seed`, on
+  // the encoders' position normalisation. Their latent size must be
+  // latent_dim. Empty: train stage 1.
+  std::string encoders_from;
   // Called before every optimisation step; may throw to stop training
   // (the CLI's Ctrl-C). Empty: never stops.
   std::function<void()> check_stop;
@@ -81,7 +87,8 @@ struct TrainOptions : TrainingConfig {
 
   // Throws std::invalid_argument naming the first bad field: the
   // TrainingConfig rules (training_config.h), then latent_dim (even, >= 2),
-  // window_s (> 0) and the heads (at least one).
+  // window_s (> 0), the heads (at least one; the anchored head only with
+  // the paper's fusion) and method (not empty).
   void Validate() const;
 };
 
@@ -97,10 +104,21 @@ struct StageReport {
   double seconds = 0.0;
 };
 
+struct DecoderScore {
+  double rmse_m = 0.0;  // nan without observations
+  std::size_t observations = 0;
+};
+
+// DecoderScore of each modality's encoder-decoder of a saved model (the
+// folder or its model.json) on episodes. Call InitTorch() first.
+std::map<std::string, DecoderScore> EvaluateDecoders(const std::string& model_path,
+                                                     const std::vector<Episode>& episodes);
+
 struct TrainReport {
   DataSplit split = DataSplit::kTrajectory;  // the Dataset's
   std::vector<StageReport> stages;
   std::vector<Eigen::Vector3d> candidate_offset_m;  // empty: not calibrated
+  std::string encoders_from;  // TrainOptions::encoders_from (no stage-1 rows then)
   // On the held-out test split, by method name: each head trained
   // ("uavloc", "uavloc_anchored") and the classical methods the caller
   // scored (TrainOptions::score_classical).
@@ -112,6 +130,12 @@ struct TrainReport {
   // `test` and `test_by_weather` on the windows every method counted
   // (OnCommonWindows, per weather within that weather's episodes).
   std::map<std::string, Evaluation> test_common;
+  // Each modality's IB decoder alone on the test episodes (the measure of
+  // the paper's Figs. 7-9: no fusion, no alignment): the RMSE (m) of the
+  // position it decodes from each observation's mu against the truth at
+  // the capture, over the observations of that modality in scored windows
+  // (sent on time or not: it is the node's own estimate); by modality name.
+  std::map<std::string, DecoderScore> test_decoder;
   std::map<std::string, std::map<std::string, Evaluation>> test_by_weather_common;
 };
 

@@ -37,6 +37,13 @@ void Visit(V& v, TrainingConfig& c) {
   v.Enum("te_align_tau_origin", c.te_align_tau_origin,
          std::vector<std::pair<const char*, TauOrigin>>{{"window", TauOrigin::kWindow},
                                                         {"clock", TauOrigin::kClock}});
+  v.Enum("alignment", c.alignment, AlignmentNames());
+  v("madw", c.madw);
+  v("mica", c.mica);
+  v.Enum("fusion", c.fusion, FusionKindNames());
+  v.Check(c.fusion == FusionKind::kUavLoc || (c.madw && c.mica), "fusion",
+          std::string("MADW and MICA belong to the paper's fusion: fusion \"") +
+              FusionKindName(c.fusion) + "\" needs madw and mica true");
   v.Enum("camera_stereo_branches", c.camera_stereo_branches,
          std::vector<std::pair<const char*, StereoBranches>>{{"shared", StereoBranches::kShared},
                                                              {"two", StereoBranches::kTwo}});

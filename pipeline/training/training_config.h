@@ -14,6 +14,7 @@
 #include <cstddef>
 #include <string>
 
+#include "pipeline/edge/fusion_kind.h"
 #include "pipeline/edge/te_align.h"
 #include "pipeline/edge/temporal_kind.h"
 #include "pipeline/node/ib_cc_config.h"
@@ -67,6 +68,14 @@ struct TrainingConfig {
   // TE-Align's τ from the window's start (ours) or the episode's clock (the
   // paper's time stamp): TeAlignConfig::tau_origin.
   TauOrigin te_align_tau_origin = TauOrigin::kWindow;
+  // The paper's Sec. VI ablations and baselines of the edge network
+  // (UavLocModelConfig): TE-Align or a resampling alignment (Fig. 12), MADW
+  // and MICA on or off (Fig. 13), the paper's fusion or a fusion baseline
+  // (Fig. 14). The variants (variants.h) set them.
+  Alignment alignment = Alignment::kTeAlign;
+  bool madw = true;
+  bool mica = true;
+  FusionKind fusion = FusionKind::kUavLoc;
   // The camera's feature encoder (IbCcConfig, pipeline/node/ib_cc_config.h):
   // the paper's two parallel stereo branches or one shared CNN; the average
   // pool of each eye's map (0: none, the paper's); the ROI geometry
@@ -108,7 +117,9 @@ struct TrainingConfig {
 
 // The JSON keys are the field names, except mixture_loss ("position_loss":
 // "mixture" | "mean"); camera_stereo_branches is "shared" | "two"; temporal "mamba" | "gru" |
-// "lstm" | "tcn". Each rule is checked when reading.
+// "lstm" | "tcn"; alignment "te_align" | "first" | "middle" | "random"; fusion "uavloc" |
+// "early" | "late" | "hemis" (a fusion baseline needs madw and mica true). Each rule is checked
+// when reading.
 template <class V>
 void Visit(V& v, TrainingConfig& c);
 

@@ -623,3 +623,145 @@ TEST_CASE("CLI: an interrupted training leaves no model and no episode file", "[
   CHECK(WEXITSTATUS(status) == 130);
   CHECK(fs::is_empty(dir));  // no model, no staging, no episode file
 }
+
+TEST_CASE(
+    "CLI: train --variant trains a variant on shared encoders that runs in the loop under "
+    "its name and on modality subsets",
+    "[sim][train][slow]") {
+  // Issue 20 item 8. The main model: a copy of the shipped default; the
+  // variant beside it (FOLDER-VARIANT) on its encoders, stage 2 only (2
+  // epochs on 4 short episodes: this checks the plumbing, not the figure).
+  const std::string dir = TempDir("train-variant");
+  const std::string main = dir + "/default", late = dir + "/default-late_fusion";
+  fs::copy(std::string(UAVSIM_SOURCE_DIR) + "/models/default", main, fs::copy_options::recursive);
+  const std::vector<std::string> small{"--quick",
+                                       "--episodes",
+                                       "4",
+                                       "--episode-s",
+                                       "4",
+                                       "--data",
+                                       dir + "/e.bin",
+                                       "--config-set",
+                                       "/stage2_max_epochs=2",
+                                       "--quiet"};
+  const auto train = [&](std::vector<std::string> args) {
+    args.insert(args.begin(), {"train", kDefault});
+    args.insert(args.end(), small.begin(), small.end());
+    return RunCli(args);
+  };
+  auto t = train({"--variant", "late_fusion", "--encoders", main, "--out", late});
+  INFO(t.err);
+  REQUIRE(t.exit_code == 0);
+  const Json manifest = Json::parse(ReadFile(late + "/model.json"));
+  CHECK(manifest["variant"] == "late_fusion");
+  CHECK(manifest["anchored_edge"] == "");
+  CHECK(manifest["training"]["fusion"] == "late");
+  CHECK_THAT(manifest["note"].get<std::string>(), Catch::Contains("stage-1 encoders from"));
+  // The stage-1 keys say how the reused encoders were trained (the shipped
+  // model's, not --quick's).
+  CHECK(manifest["training"]["stage1_lr"] ==
+        Json::parse(ReadFile(main + "/model.json"))["training"]["stage1_lr"]);
+  for (const char* part : {"camera.pt", "lidar.pt", "radar.pt"})
+    CHECK(ReadFile(late + "/" + part) == ReadFile(main + "/" + part));
+  const Json report = Json::parse(ReadFile(late + "/training_report.json"));
+  CHECK(report["method"] == "late_fusion");
+  CHECK(report["edge"]["fusion"] == "late");
+  CHECK(report["stages"].size() == 1);  // stage 2 only
+  CHECK(report["test"]["late_fusion"]["all"]["rmse_m"].is_number());
+  CHECK(report["test_common_windows"].contains("ekf"));
+
+  // In the loop: the variant, the variant on two modalities, and the
+  // paper's pipeline beside it, on the main model's latents.
+  const std::string run = dir + "/run";
+  auto r =
+      RunCli({"run", kDefault, "--out", run, "--duration", "3", "--quiet", "--set",
+              "/pipeline/model=" + main, "--set",
+              R"(/pipeline/methods=["uavloc","late_fusion","late_fusion[camera+lidar]","ekf"])"});
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  const Json metrics = Json::parse(ReadFile(run + "/metrics.json"));
+  for (const char* method : {"uavloc", "late_fusion", "late_fusion[camera+lidar]"}) {
+    INFO(method);
+    CHECK(metrics["estimated_windows"][method].get<int>() > 0);
+    CHECK(std::isfinite(metrics["rmse_m"][method].get<double>()));
+  }
+  CHECK(metrics["uavloc_model"]["variant"] == "paper");
+  CHECK(metrics["uavloc_model"]["variants"]["late_fusion"] == late + "/model.json");
+  // The full-modality variant steers a beam, the subset does not.
+  const std::string rates = ReadFile(run + "/rate_snr.csv");
+  CHECK(rates.find(",late_fusion,") != std::string::npos);
+  CHECK(rates.find(",late_fusion[camera+lidar],") == std::string::npos);
+
+  // Refused, exit 2, naming what: an unknown variant; encoders for a
+  // variant that changes what the nodes send; the anchored head for a
+  // variant; encoders of another scenario's model; a method whose variant
+  // has no model beside /pipeline/model; uavloc asked of a variant's model.
+  const auto refused = [&](const std::vector<std::string>& args, const std::string& says) {
+    INFO(says);
+    const auto x = RunCli(args);
+    CHECK(x.exit_code == 2);
+    CHECK_THAT(x.err, Catch::Contains(says));
+  };
+  refused({"train", kDefault, "--variant", "nope", "--out", dir + "/x"},
+          "--variant expects one of");
+  refused({"train", kDefault, "--variant", "raw", "--encoders", main, "--out", dir + "/x"},
+          "trains its own encoders");
+  refused({"train", kDefault, "--variant", "gru", "--head", "both", "--out", dir + "/x"},
+          "trains the paper's head only");
+  refused({"train", kDefault, "--variant", "gru", "--bottleneck", "mlp", "--out", dir + "/x"},
+          "contradicts --variant gru");
+  {
+    const std::vector<std::string> other{
+        "train",        kDefault,     "--variant",
+        "gru",          "--encoders", std::string(UAVSIM_SOURCE_DIR) + "/models/mmaud_twin",
+        "--out",        dir + "/x",   "--quick",
+        "--episodes",   "3",          "--data",
+        dir + "/e.bin", "--quiet"};
+    refused(other, "was trained for scenario \"mmaud_twin\"");
+  }
+  CHECK_FALSE(fs::exists(dir + "/x"));
+  refused({"run", kDefault, "--out", dir + "/r2", "--quiet", "--set", "/pipeline/model=" + main,
+           "--set", R"(/pipeline/methods=["ekf","tcn"])"},
+          "/pipeline/methods/1: no model of the tcn variant at " + main + "-tcn/model.json");
+  refused({"run", kDefault, "--out", dir + "/r2", "--quiet", "--set", "/pipeline/model=" + late,
+           "--set", R"(/pipeline/methods=["uavloc"])"},
+          "is the late_fusion variant, not the paper's pipeline: list it as method late_fusion");
+  refused({"validate", kDefault, "--set", R"(/pipeline/methods=["uavloc[camera+foo]"])"},
+          "/pipeline/methods/0: expected one of");
+  CHECK_FALSE(fs::exists(dir + "/r2"));
+
+  // The raw variant trains its own encoders on episodes the nodes send
+  // without pre-processing, at toy size, and every stage's validation loss
+  // falls; it runs as the scenario's model only with raw pre-processing.
+  {
+    const std::string raw = dir + "/raw";
+    auto x = RunCli({"train", kDefault, "--variant", "raw", "--quick", "--episodes", "3",
+                     "--episode-s", "4", "--config-set", "/stage1_max_epochs=3", "--config-set",
+                     "/stage2_max_epochs=3", "--out", raw, "--quiet"});
+    INFO(x.err);
+    REQUIRE(x.exit_code == 0);
+    const Json rr = Json::parse(ReadFile(raw + "/training_report.json"));
+    for (const Json& stage : rr["stages"]) {
+      INFO(stage.dump());
+      CHECK(stage["best_validation_loss"].get<double>() <
+            stage["initial_validation_loss"].get<double>());
+    }
+    CHECK(rr["test"].contains("raw"));
+    refused({"run", kDefault, "--out", dir + "/r2", "--quiet", "--set", "/pipeline/model=" + raw,
+             "--set", R"(/pipeline/methods=["raw"])"},
+            "/pipeline/preprocess/raw: the model " + raw +
+                "/model.json is the raw variant, trained on data without pre-processing");
+    auto y = RunCli({"run", kDefault, "--out", dir + "/r3", "--quiet", "--duration", "2", "--set",
+                     "/pipeline/model=" + raw, "--set", "/pipeline/preprocess/raw=true", "--set",
+                     R"(/pipeline/methods=["raw","ekf"])"});
+    INFO(y.err);
+    CHECK(y.exit_code == 0);
+  }
+
+  // --help lists every variant with its figure.
+  const auto help = RunCli({"train", "--help"});
+  for (const char* name : {"paper", "gru", "lstm", "tcn", "resample_first", "resample_middle",
+                           "resample_random", "no_madw", "no_mica", "no_madw_mica", "early_fusion",
+                           "late_fusion", "modality_dropout", "hemis", "mlp_bottleneck", "raw"})
+    CHECK_THAT(help.out, Catch::Contains(std::string("\n  ") + name + " "));
+}

@@ -3,6 +3,7 @@
 // windows and bad input.
 #include "pipeline/edge/te_align.h"
 
+#include <array>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <stdexcept>
@@ -149,6 +150,77 @@ TEST_CASE("TeAlign: bad latents and configurations are refused", "[pipeline]") {
   TeAlignConfig zero_window = Config(4);
   zero_window.window_s = 0.0;
   CHECK_THROWS_WITH(TeAlign(zero_window), Catch::Contains("window_s (0)"));
+}
+
+}  // namespace uavsim::pipeline
+
+namespace uavsim::pipeline {
+namespace {
+
+// Sec. VI, Fig. 12: the resampling baselines keep one frame's latent as it
+// is. Worked by hand: window 1 (0 <= t < 0.2 s) holds camera frames stamped
+// 0.15, 0.05, 0.10 s (arrival order) with latents [3 3], [1 1], [2 2]; in
+// time order they are [1 1] (first), [2 2] (middle: index floor(3/2) = 1),
+// [3 3]. LiDAR: 0.12 and 0.02 s with [5 5], [4 4]: first [4 4], middle
+// index floor(2/2) = 1: [5 5]. A frame of window 2 (0.25 s) is ignored.
+WindowInputs HandWindow() {
+  WindowInputs w;
+  w.window = 1;
+  w.frames[0] = {Frame(0.15, {3, 3}), Frame(0.05, {1, 1}), Frame(0.10, {2, 2}),
+                 Frame(0.25, {9, 9})};
+  w.frames[1] = {Frame(0.12, {5, 5}), Frame(0.02, {4, 4})};
+  return w;
+}
+
+}  // namespace
+
+TEST_CASE("TeAlign resampling: first, middle and random pick the frame worked by hand",
+          "[pipeline]") {
+  TeAlignConfig c = Config(2);
+  c.alignment = Alignment::kFirst;
+  AlignedWindow a = TeAlign(c).Align(HandWindow());
+  CHECK(a.latent[0] == std::vector<float>{1, 1});
+  CHECK(a.latent[1] == std::vector<float>{4, 4});
+  CHECK(a.latent[2] == std::vector<float>{0, 0});
+  CHECK(a.mask == std::array<float, 3>{1, 1, 0});
+  CHECK(a.frames_outside_window == 1);
+
+  c.alignment = Alignment::kMiddle;
+  a = TeAlign(c).Align(HandWindow());
+  CHECK(a.latent[0] == std::vector<float>{2, 2});
+  CHECK(a.latent[1] == std::vector<float>{5, 5});
+
+  // Random: the frame RandomFrameIndex names, in time order, and the same
+  // on every call.
+  c.alignment = Alignment::kRandom;
+  a = TeAlign(c).Align(HandWindow());
+  const float camera[3] = {1, 2, 3}, lidar[2] = {4, 5};
+  CHECK(a.latent[0][0] == camera[RandomFrameIndex(1, 0, 3)]);
+  CHECK(a.latent[1][0] == lidar[RandomFrameIndex(1, 1, 2)]);
+  CHECK(TeAlign(c).Align(HandWindow()).latent == a.latent);
+
+  // TE-Align itself on the same window: the mean of latent plus encoding,
+  // not any single frame.
+  const AlignedWindow te = TeAlign(Config(2)).Align(HandWindow());
+  CHECK(te.latent[0][0] != Approx(1.0f));
+  CHECK(te.latent[0][0] != Approx(2.0f));
+}
+
+TEST_CASE("RandomFrameIndex: in range and spread over the frames", "[pipeline]") {
+  // Over 3000 windows of 3 frames each index is drawn about 1000 times: a
+  // chi-square of the counts against uniform, 2 degrees of freedom, below
+  // its 0.999 quantile 13.8.
+  int counts[3] = {0, 0, 0};
+  for (std::int64_t k = 1; k <= 3000; ++k) {
+    const std::size_t i = RandomFrameIndex(k, 2, 3);
+    REQUIRE(i < 3);
+    ++counts[i];
+  }
+  double chi2 = 0.0;
+  for (int c : counts) chi2 += (c - 1000.0) * (c - 1000.0) / 1000.0;
+  CHECK(chi2 < 13.8);
+  CHECK(RandomFrameIndex(7, 0, 1) == 0);
+  CHECK_THROWS_AS(RandomFrameIndex(7, 0, 0), std::invalid_argument);
 }
 
 }  // namespace uavsim::pipeline

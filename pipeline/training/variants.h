@@ -1,0 +1,47 @@
+// The paper's Sec. VI baselines and ablations as named variants of the
+// trained pipeline (`uavsim train --variant NAME`). A variant is data: the
+// training-config keys it sets (applied over the defaults, before any
+// --config file or --config-set, and checked by the same rules), plus the
+// node-side choices a training config does not hold (the MLP bottleneck, raw
+// pre-processing). Its model folder records the name (model.json
+// "variant"); in the loop it runs as the method of that name (VariantMethod).
+//
+// The names are a contract (README): paper (the default), gru, lstm, tcn,
+// te_align, resample_first, resample_middle, resample_random, no_madw,
+// no_mica, no_madw_mica, early_fusion, late_fusion, modality_dropout, hemis,
+// mlp_bottleneck, raw. Torch-free header.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "pipeline/training/training_config.h"
+
+namespace uavsim::pipeline {
+
+struct Variant {
+  const char* name;
+  const char* figure;       // the paper's artefact it belongs to
+  const char* description;  // one line for --help and the README
+  const char* config;       // JSON object of TrainingConfig keys it sets
+  bool mlp_bottleneck;      // the nodes compress with the MLP baseline
+  bool raw;                 // the nodes send raw (not pre-processed) data
+  // Whether the stage-1 encoders of another model (the paper's, same data)
+  // can serve it: false when the variant changes what the nodes send.
+  bool shares_encoders() const { return !mlp_bottleneck && !raw; }
+};
+
+// Every variant, `paper` first.
+const std::vector<Variant>& Variants();
+// nullptr when `name` is none of them.
+const Variant* FindVariant(const std::string& name);
+// "paper, gru, lstm, ..." for messages.
+std::string VariantNames();
+// The method name a variant runs under: "uavloc" for paper, else its name.
+std::string VariantMethod(const std::string& name);
+
+// `base` with the variant's keys set. Throws core::ConfigError naming
+// "variant NAME" and the key when the variant's keys break a rule.
+TrainingConfig ApplyVariant(const Variant& v, const TrainingConfig& base);
+
+}  // namespace uavsim::pipeline
