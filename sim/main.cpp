@@ -19,6 +19,7 @@
 #include "results/run_report.h"
 #include "sim/bench_beam.h"
 #include "sim/bench_events.h"
+#include "sim/bench_flops.h"
 #include "sim/bench_link.h"
 #include "sim/bench_noise.h"
 #include "sim/bench_pipeline.h"
@@ -55,7 +56,7 @@ const char* kMainHelp =
     "  sweep SPEC.json            run a grid of scenarios (packet loss x weather x seeds)\n"
     "  train SCENARIO.json        train the UAVLoc model by simulation\n"
     "  report DIR                 redraw a run's or a sweep's report.html from its files\n"
-    "  bench [raycast|radar|events|link|beam|pipeline|noise|all]   measure the hot paths\n"
+    "  bench [raycast|radar|events|link|beam|pipeline|noise|flops|all]   measure the hot paths\n"
     "\n"
     "options: --help (also after a command), --version, --quiet (every command)\n"
     "exit codes: 0 ok, 1 failure while running, 2 bad input or usage, 130 interrupted\n";
@@ -226,7 +227,7 @@ std::string TrainVariantsHelp() {
 }
 
 const char* kBenchHelp =
-    "usage: uavsim bench [raycast|radar|events|link|beam|pipeline|noise|all] [--quiet]\n"
+    "usage: uavsim bench [raycast|radar|events|link|beam|pipeline|noise|flops|all] [--quiet]\n"
     "\n"
     "  raycast    Embree rtcIntersect1 throughput vs each sensor's rays per second in the\n"
     "             default city; the camera's packet speed-up; camera + LiDAR real-time factor\n"
@@ -238,6 +239,10 @@ const char* kBenchHelp =
     "  pipeline   IB-CC encode per frame (camera, LiDAR, radar) and edge inference per\n"
     "             window, one thread\n"
     "  noise      standard normals per second: counter-based Ziggurat vs RngStream::Normal\n"
+    "  flops      the paper's Table III: MFLOPs per frame of each encoder (counted from the\n"
+    "             layers' shapes, 2 FLOPs per multiply-add as in the paper) and of each\n"
+    "             pre-processing step (an estimate from the algorithms' operation counts),\n"
+    "             beside the paper's values; no timing\n"
     "  all        everything available (default)\n";
 
 // Flags of one command: name -> takes a value.
@@ -687,6 +692,7 @@ int Bench(int argc, char** argv) {
       {"beam", [&] { return uavsim::sim::BenchBeam(quiet, std::cout); }},
       {"pipeline", [&] { return uavsim::sim::BenchPipeline(quiet, std::cout); }},
       {"noise", [&] { return uavsim::sim::BenchNoise(quiet, std::cout); }},
+      {"flops", [&] { return uavsim::sim::BenchFlops(quiet, std::cout); }},
   };
   int rc = kExitOk;
   bool found = false;
@@ -698,7 +704,7 @@ int Bench(int argc, char** argv) {
   }
   if (!found)
     throw UsageError("uavsim bench: unknown target '" + what +
-                     "' (raycast, radar, events, link, beam, pipeline, noise or all)");
+                     "' (raycast, radar, events, link, beam, pipeline, noise, flops or all)");
   return rc;
 }
 

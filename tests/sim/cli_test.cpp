@@ -165,6 +165,23 @@ TEST_CASE("CLI: a model whose files changed since training is refused, naming th
   CHECK(!fs::exists(dir + "/run"));
 }
 
+TEST_CASE("CLI: bench flops prints Table III beside the paper's values", "[sim]") {
+  const auto r = RunCli({"bench", "flops"});
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  // The paper's column, and our count of its image encoder next to it.
+  for (const char* paper : {"207.09", "14.81", "40.33", "147.32", "1426.98"})
+    CHECK_THAT(r.out, Catch::Contains(paper));
+  CHECK_THAT(r.out, Catch::Contains("image encoder, paper layout"));
+  CHECK_THAT(r.out, Catch::Contains("147.33        147.32    1.00"));
+  CHECK_THAT(r.out, Catch::Contains("multiply-add: the paper's convention"));
+  CHECK_THAT(r.out, Catch::Contains("camera pre-processing (estimate)"));
+  const auto quiet = RunCli({"bench", "flops", "--quiet"});
+  CHECK(quiet.exit_code == 0);
+  CHECK(CountLines(quiet.out) == 8);  // the header and seven rows
+  CHECK_THAT(quiet.out, Catch::StartsWith("module"));
+}
+
 TEST_CASE("CLI: a method whose edge head the model lacks is refused, naming the method", "[sim]") {
   // The shipped model without its paper head (as models trained with
   // `--head anchored` are): uavloc and its single-modality rows need it,
