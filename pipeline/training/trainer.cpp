@@ -648,6 +648,16 @@ std::map<std::string, DecoderScore> DecoderScores(std::vector<IbCcModel>& encode
 }
 
 // The stage-1 encoders of a saved model (TrainOptions::encoders_from).
+// The camera, LiDAR and radar encoders of the model whose manifest is
+// `manifest_path`.
+std::vector<IbCcModel> ManifestEncoders(const ModelManifest& m, const std::string& manifest_path) {
+  const fs::path folder = fs::path(manifest_path).parent_path();
+  std::vector<IbCcModel> encoders;
+  for (const std::string* name : {&m.camera, &m.lidar, &m.radar})
+    encoders.push_back(LoadIbCcModel((folder / *name).string()));
+  return encoders;
+}
+
 std::vector<IbCcModel> LoadEncoders(const std::string& model_path, int latent_dim,
                                     std::optional<TrainingConfig>* trained_with) {
   const std::string manifest_path = ModelManifestPath(model_path);
@@ -657,12 +667,8 @@ std::vector<IbCcModel> LoadEncoders(const std::string& model_path, int latent_di
     throw std::invalid_argument("train: the encoders of " + manifest_path + " send " +
                                 std::to_string(m.latent_dim) + " values, training asks for " +
                                 std::to_string(latent_dim));
-  const fs::path folder = fs::path(manifest_path).parent_path();
-  std::vector<IbCcModel> encoders;
-  for (const std::string* name : {&m.camera, &m.lidar, &m.radar})
-    encoders.push_back(LoadIbCcModel((folder / *name).string()));
   *trained_with = m.training;
-  return encoders;
+  return ManifestEncoders(m, manifest_path);
 }
 
 // The stage-1 keys of `from` (how the encoders were trained) into `to`.
@@ -887,10 +893,7 @@ std::map<std::string, Evaluation> EvaluateModel(const std::string& model_path,
                                                 const std::vector<Episode>& episodes) {
   const std::string manifest_path = ModelManifestPath(model_path);
   const ModelManifest m = ReadModelManifest(manifest_path);
-  const fs::path folder = fs::path(manifest_path).parent_path();
-  std::vector<IbCcModel> encoders;
-  for (const std::string* name : {&m.camera, &m.lidar, &m.radar})
-    encoders.push_back(LoadIbCcModel((folder / *name).string()));
+  std::vector<IbCcModel> encoders = ManifestEncoders(m, manifest_path);
   const IbNormalization& norm = encoders.front()->config().normalization;
   const EdgeHeads heads = ReadEdgeHeads(m, manifest_path);
   std::map<std::string, Evaluation> out;
@@ -910,10 +913,7 @@ std::map<std::string, DecoderScore> EvaluateDecoders(const std::string& model_pa
                                                      const std::vector<Episode>& episodes) {
   const std::string manifest_path = ModelManifestPath(model_path);
   const ModelManifest m = ReadModelManifest(manifest_path);
-  const fs::path folder = fs::path(manifest_path).parent_path();
-  std::vector<IbCcModel> encoders;
-  for (const std::string* name : {&m.camera, &m.lidar, &m.radar})
-    encoders.push_back(LoadIbCcModel((folder / *name).string()));
+  std::vector<IbCcModel> encoders = ManifestEncoders(m, manifest_path);
   TeAlignConfig windows;
   windows.latent_dim = m.latent_dim;
   windows.window_s = m.window_s;
