@@ -1,5 +1,7 @@
 #include "pipeline/pipeline_config.h"
 
+#include <algorithm>
+#include <cctype>
 #include <stdexcept>
 
 #include "pipeline/training/variants.h"
@@ -50,6 +52,84 @@ std::optional<MethodName> ParseMethod(const std::string& name) {
   return std::nullopt;
 }
 
+const ScriptedMethod* PipelineConfig::FindScripted(const std::string& name) const {
+  for (const ScriptedMethod& s : scripted)
+    if (s.name == name) return &s;
+  return nullptr;
+}
+
+namespace {
+
+// A scripted method's name: letters, digits and _ (it names columns and
+// files), not a built-in method's or a variant's.
+bool ValidScriptedName(const std::string& name) {
+  if (name.empty() || name.size() > 64) return false;
+  for (char ch : name)
+    if (!(std::isalnum(static_cast<unsigned char>(ch)) || ch == '_')) return false;
+  return !ParseMethod(name);
+}
+
+// /pipeline/methods: each entry a method's name or a scripted method's
+// object; no name twice.
+void ReadMethods(const core::Json& j, const std::string& file, const std::string& at,
+                 PipelineConfig& c) {
+  if (!j.is_array())
+    throw core::ConfigError(
+        file, at,
+        "expected an array of strings (method names) or TorchScript method objects, got " +
+            core::DescribeValue(j));
+  if (j.size() > 256)
+    throw core::ConfigError(file, at,
+                            "expected at most 256 methods, got " + std::to_string(j.size()));
+  c.methods.clear();
+  c.scripted.clear();
+  for (std::size_t i = 0; i < j.size(); ++i) {
+    const std::string p = at + "/" + std::to_string(i);
+    const core::Json& e = j[i];
+    std::string name;
+    if (e.is_object()) {
+      std::string type = "torchscript";
+      ScriptedMethod s;
+      core::JsonReader r(e, file, p);
+      r("type", type);
+      r("name", s.name);
+      r("edge", s.edge);
+      r.Check(type == "torchscript", "type", "expected \"torchscript\", got \"" + type + "\"");
+      r.Check(r.Has("name"), "name", "expected the method's name");
+      r.Check(s.name.empty() || ValidScriptedName(s.name), "name",
+              "expected letters, digits and _ (at most 64), not a built-in method's or a "
+              "variant's name, got \"" +
+                  s.name + "\"");
+      r.Check(!s.edge.empty(), "edge", "expected the path of the TorchScript file");
+      r.Finish();
+      name = s.name;
+      c.scripted.push_back(std::move(s));
+    } else if (e.is_string()) {
+      name = e.get<std::string>();
+      if (!ParseMethod(name))
+        throw core::ConfigError(
+            file, p,
+            "expected one of \"uavloc\", \"uavloc_anchored\", \"anchor_track\", \"ekf\", "
+            "\"uavloc_camera\", \"uavloc_lidar\", \"uavloc_radar\", a variant's method (" +
+                VariantNames() +
+                "; paper is uavloc), a learned one with a modality subset, e.g. "
+                "uavloc[camera+lidar], or a TorchScript model {\"type\": \"torchscript\", "
+                "\"name\": ..., \"edge\": FILE}; got \"" +
+                name + "\"");
+    } else {
+      throw core::ConfigError(file, p,
+                              "expected a method's name or a {\"type\": \"torchscript\", ...} "
+                              "object, got " +
+                                  core::DescribeValue(e));
+    }
+    if (std::find(c.methods.begin(), c.methods.end(), name) != c.methods.end())
+      throw core::ConfigError(file, p, "duplicate entry \"" + name + "\"");
+    c.methods.push_back(name);
+  }
+}
+
+}  // namespace
+
 template <class V>
 void Visit(V& v, PipelineConfig& c) {
   v("model", c.model);
@@ -61,18 +141,17 @@ void Visit(V& v, PipelineConfig& c) {
           "latent_dim",
           "expected one of 4, 8, 16, 32, 64 (paper Sec. VI), got " + std::to_string(c.latent_dim));
   v("late_allowance_s", c.late_allowance_s, Rule::NonNegative(10.0));
-  v("methods", c.methods);
-  if constexpr (V::kReading)
-    for (std::size_t i = 0; i < c.methods.size(); ++i)
-      if (!ParseMethod(c.methods[i]))
-        throw core::ConfigError(
-            v.file(), v.Child("methods") + "/" + std::to_string(i),
-            "expected one of \"uavloc\", \"uavloc_anchored\", \"anchor_track\", \"ekf\", "
-            "\"uavloc_camera\", \"uavloc_lidar\", \"uavloc_radar\", a variant's method (" +
-                VariantNames() +
-                "; paper is uavloc), or a learned one with a modality subset, e.g. "
-                "uavloc[camera+lidar]; got \"" +
-                c.methods[i] + "\"");
+  if constexpr (V::kReading) {
+    if (const core::Json* j = v.Raw("methods")) ReadMethods(*j, v.file(), v.Child("methods"), c);
+  } else {
+    core::Json list = core::Json::array();
+    for (const std::string& name : c.methods)
+      if (const ScriptedMethod* s = c.FindScripted(name))
+        list.push_back({{"type", "torchscript"}, {"name", s->name}, {"edge", s->edge}});
+      else
+        list.push_back(name);
+    v.Raw("methods", std::move(list));
+  }
   v("uavloc_wait_for_track", c.uavloc_wait_for_track);
   v.Object("preprocess", c.preprocess);
   v.Object("ekf", c.ekf);

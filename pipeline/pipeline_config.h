@@ -11,6 +11,16 @@
 
 namespace uavsim::pipeline {
 
+// A user's edge model run as a method (/pipeline/methods entry
+// {"type": "torchscript", "name": NAME, "edge": FILE}): a TorchScript file
+// (pipeline/edge/scripted_edge.h says what it is given and must return),
+// relative to the scenario's folder. NAME is the method's name in every
+// output; it is listed in PipelineConfig::methods like any other.
+struct ScriptedMethod {
+  std::string name;
+  std::string edge;
+};
+
 struct PipelineConfig {
   std::string model = "default";  // "default": the model shipped for scenarios/default.json
   double window_s = 0.2;          // paper: alignment window t^w = 0.2 s
@@ -23,6 +33,11 @@ struct PipelineConfig {
   // (pipeline/anchored/); anchor_track: its anchor filter alone (no
   // learning). sim/edge_server.h says more.
   std::vector<std::string> methods{"uavloc", "uavloc_anchored", "anchor_track", "ekf"};
+  // The entries of `methods` that are a user's TorchScript model (their
+  // names are in `methods` too, in the order listed).
+  std::vector<ScriptedMethod> scripted;
+  // The scripted method named `name`, or null.
+  const ScriptedMethod* FindScripted(const std::string& name) const;
   // uavloc_anchored answers from its first window with a track of its anchor
   // filter (pipeline/edge/edge_localizer.h), as ekf and anchor_track from
   // their first confirmed track; false: from its first window with any data
@@ -55,7 +70,8 @@ struct MethodName {
   std::string learned;
   int modalities = 7;
 };
-// nullopt when `name` is not a method a scenario may list.
+// nullopt when `name` is not a method a scenario may list (a scripted
+// method's name is the scenario's own: PipelineConfig::FindScripted).
 std::optional<MethodName> ParseMethod(const std::string& name);
 
 template <class V>

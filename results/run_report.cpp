@@ -806,7 +806,11 @@ std::vector<std::vector<std::string>> SettingsRows(const RunData& d) {
                           JsonText(At(s, "/base_station/path_model")));
   std::string methods;
   if (const Json m = At(s, "/pipeline/methods"); m.is_array())
-    for (const Json& x : m) methods += (methods.empty() ? "" : ", ") + JsonText(x);
+    for (const Json& x : m)
+      methods += (methods.empty() ? "" : ", ") +
+                 (x.is_object() ? JsonText(x.value("name", Json(nullptr))) + " (TorchScript " +
+                                      JsonText(x.value("edge", Json(nullptr))) + ")"
+                                : JsonText(x));
   add("methods", methods);
   add("model", JsonText(At(s, "/pipeline/model")));
   add("window (s)", JsonText(At(s, "/pipeline/window_s")));

@@ -8,6 +8,7 @@
 #include <iterator>
 
 #include "pipeline/anchored/geometric_anchor.h"
+#include "pipeline/edge/scripted_edge.h"
 #include "pipeline/model_checksums.h"
 #include "pipeline/pipeline_config.h"
 #include "pipeline/torch_runtime.h"
@@ -238,6 +239,26 @@ void RequireRawFits(const Scenario& s, const std::string& file, const std::strin
                                 "set it to true");
 }
 
+// The scenario's TorchScript methods, loaded and their signatures checked:
+// else a ConfigError naming the entry's /pipeline/methods/i/edge.
+std::map<std::string, std::unique_ptr<pipeline::ScriptedEdge>> LoadScripted(
+    const Scenario& s, const std::string& file) {
+  namespace fs = std::filesystem;
+  std::map<std::string, std::unique_ptr<pipeline::ScriptedEdge>> loaded;
+  for (std::size_t i = 0; i < s.pipeline.methods.size(); ++i) {
+    const pipeline::ScriptedMethod* m = s.pipeline.FindScripted(s.pipeline.methods[i]);
+    if (!m) continue;
+    const std::string path = (fs::path(s.base_dir) / m->edge).lexically_normal().string();
+    try {
+      loaded[m->name] =
+          pipeline::ScriptedEdge::Load(path, s.pipeline.latent_dim, s.pipeline.window_s);
+    } catch (const std::invalid_argument& e) {
+      throw core::ConfigError(file, "/pipeline/methods/" + std::to_string(i) + "/edge", e.what());
+    }
+  }
+  return loaded;
+}
+
 }  // namespace
 
 std::unique_ptr<pipeline::Ekf> MakeEkf(const Scenario& s) {
@@ -264,6 +285,7 @@ std::unique_ptr<pipeline::Ekf> MakeEkf(const Scenario& s) {
 
 bool NeedsTrainedModel(const Scenario& s) {
   const auto& m = s.pipeline.methods;
+  if (!s.pipeline.scripted.empty()) return true;  // they run on the model's latents
   return std::any_of(m.begin(), m.end(), [](const std::string& method) {
     return !MethodOf(method).learned.empty() || method == "uavloc_anchored";
   });
@@ -287,6 +309,8 @@ void CheckTrainedModel(const Scenario& s, const std::string& file) {
   RequireRawFits(s, file, path, m);
   RequireHeads(s, file, path, m, heads);
   VariantModelPaths(s, file, m, path);
+  pipeline::InitTorch(1, s.seed);
+  LoadScripted(s, file);
 }
 
 EdgeServer::EdgeServer(const Scenario& s, const std::string& scenario_file, bool quiet,
@@ -323,6 +347,11 @@ EdgeServer::EdgeServer(const Scenario& s, const std::string& scenario_file, bool
         variant == main.variant ? *model_ : *variant_models_.at(variant);
     learned_[method] = {name.modalities, files.LoadEdge(false)};
   }
+  scripted_ = LoadScripted(s, scenario_file);
+  for (const auto& [name, edge] : scripted_) {
+    (void)edge;
+    model_info_["scripted"][name] = s.pipeline.FindScripted(name)->edge;
+  }
 }
 
 EdgeServer::~EdgeServer() = default;
@@ -351,6 +380,7 @@ std::vector<std::string> EdgeServer::SteeredMethods() const {
   if (ekf_) steered.push_back("ekf");
   for (const auto& [method, learned] : learned_)
     if (learned.modalities == pipeline::kModalitySubsets) steered.push_back(method);
+  for (const auto& [method, edge] : scripted_) steered.push_back(method);
   return steered;
 }
 
@@ -395,6 +425,10 @@ std::map<std::string, Eigen::Vector3d> EdgeServer::EstimateWindow(std::int64_t t
       for (int m = 0; m < pipeline::kModalityCount; ++m)
         if (learned.modalities & (1 << m)) fed.frames[m] = inputs.frames[m];
       if (const auto p = learned.edge->OnWindow(fed)) estimated[method] = *p;
+    }
+    for (auto& [method, edge] : scripted_) {
+      const auto timing = core::WallProfile::Measure(profile_, "edge/" + method);
+      if (const auto p = edge->OnWindow(inputs)) estimated[method] = *p;
     }
     if (uavloc_) {
       const auto timing = core::WallProfile::Measure(profile_, "edge/uavloc");

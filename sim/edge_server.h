@@ -26,6 +26,9 @@
 //                    among the nodes' geometric anchors (pipeline/anchored/)
 //   anchor_track     that head's anchor filter alone (anchor_track.h): no
 //                    learning; what uavloc_anchored's network adds over it
+//   {"type": "torchscript", "name": NAME, "edge": FILE}
+//                    a user's edge model (pipeline/edge/scripted_edge.h) on
+//                    the latents uavloc gets, under NAME; steers a beam
 // The nodes send their geometric anchors with their latents only when
 // uavloc_anchored or anchor_track runs (MessageBytes counts them).
 //
@@ -46,6 +49,7 @@
 #include "pipeline/anchored/anchor_track.h"
 #include "pipeline/baselines/ekf.h"
 #include "pipeline/edge/edge_localizer.h"
+#include "pipeline/edge/scripted_edge.h"
 #include "pipeline/edge/te_align.h"
 #include "pipeline/model_bundle.h"
 #include "pipeline/node/node_encoder.h"
@@ -135,6 +139,8 @@ class EdgeServer {
     std::unique_ptr<pipeline::EdgeLocalizer> edge;
   };
   std::map<std::string, Learned> learned_;
+  // The users' TorchScript methods (/pipeline/methods objects), by name.
+  std::map<std::string, std::unique_ptr<pipeline::ScriptedEdge>> scripted_;
   std::map<std::int64_t, pipeline::WindowInputs> pending_;           // window k -> latents arrived
   std::map<std::int64_t, pipeline::WindowAnchors> pending_anchors_;  // for anchor_track
   core::WallProfile* profile_ = nullptr;

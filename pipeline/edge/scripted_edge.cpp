@@ -1,0 +1,168 @@
+#include "pipeline/edge/scripted_edge.h"
+
+#include <torch/script.h>
+#include <torch/torch.h>
+
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <filesystem>
+#include <stdexcept>
+#include <utility>
+
+namespace uavsim::pipeline {
+namespace {
+
+constexpr int kMaxHistoryWindows = 10000;
+
+const char* const kSignature =
+    "forward(latents: float32 [L, 3, F, z], offsets_s: float32 [L, 3, F], mask: float32 "
+    "[L, 3, F]) -> 3 numbers (x, y, z: world ENU metres)";
+
+// The first line of a LibTorch message (they run to a traceback).
+std::string FirstLine(const std::string& s) {
+  const auto end = s.find('\n');
+  return end == std::string::npos ? s : s.substr(0, end);
+}
+
+}  // namespace
+
+struct ScriptedEdge::Impl {
+  torch::jit::script::Module module;
+  int latent_dim = 16;
+  double window_s = 0.2;
+  int history = 1;
+  std::deque<WindowInputs> windows;  // the last `history` windows, oldest first
+  std::optional<std::int64_t> last_window;
+  bool has_seen_data = false;
+
+  // The model's output for the windows held (padded to `history`).
+  torch::Tensor Forward() {
+    std::size_t frames = 1;
+    for (const WindowInputs& w : windows)
+      for (const auto& f : w.frames) frames = std::max(frames, f.size());
+    const auto L = static_cast<std::int64_t>(history), F = static_cast<std::int64_t>(frames);
+    torch::Tensor latents = torch::zeros({L, kModalityCount, F, latent_dim});
+    torch::Tensor offsets = torch::zeros({L, kModalityCount, F});
+    torch::Tensor mask = torch::zeros({L, kModalityCount, F});
+    auto lat = latents.accessor<float, 4>();
+    auto off = offsets.accessor<float, 3>();
+    auto msk = mask.accessor<float, 3>();
+    const std::int64_t first = L - static_cast<std::int64_t>(windows.size());
+    for (std::size_t i = 0; i < windows.size(); ++i) {
+      const WindowInputs& w = windows[i];
+      const std::int64_t l = first + static_cast<std::int64_t>(i);
+      const double start_s = static_cast<double>(w.window - 1) * window_s;
+      for (int m = 0; m < kModalityCount; ++m) {
+        std::vector<const LatentFrame*> sorted;
+        for (const LatentFrame& f : w.frames[static_cast<std::size_t>(m)]) sorted.push_back(&f);
+        std::stable_sort(
+            sorted.begin(), sorted.end(),
+            [](const LatentFrame* a, const LatentFrame* b) { return a->t_s < b->t_s; });
+        for (std::size_t f = 0; f < sorted.size(); ++f) {
+          for (int d = 0; d < latent_dim; ++d)
+            lat[l][m][static_cast<std::int64_t>(f)][d] =
+                sorted[f]->latent[static_cast<std::size_t>(d)];
+          off[l][m][static_cast<std::int64_t>(f)] = static_cast<float>(sorted[f]->t_s - start_s);
+          msk[l][m][static_cast<std::int64_t>(f)] = 1.0f;
+        }
+      }
+    }
+    torch::NoGradGuard no_grad;
+    const torch::jit::IValue out = module.forward({latents, offsets, mask});
+    if (!out.isTensor()) throw std::runtime_error("returned no tensor");
+    return out.toTensor();
+  }
+};
+
+ScriptedEdge::ScriptedEdge(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+ScriptedEdge::~ScriptedEdge() = default;
+
+std::unique_ptr<ScriptedEdge> ScriptedEdge::Load(const std::string& path, int latent_dim,
+                                                 double window_s) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec))
+    throw std::invalid_argument("no TorchScript file at " + path);
+  auto impl = std::make_unique<Impl>();
+  impl->latent_dim = latent_dim;
+  impl->window_s = window_s;
+  try {
+    impl->module = torch::jit::load(path, torch::kCPU);
+  } catch (const c10::Error& e) {
+    throw std::invalid_argument(path + " is not a TorchScript file torch.jit.save wrote (" +
+                                FirstLine(e.what_without_backtrace()) + ")");
+  }
+  impl->module.eval();
+  const auto forward = impl->module.find_method("forward");
+  if (!forward)
+    throw std::invalid_argument(path + " has no forward method: expected " + kSignature);
+  // The schema's first argument is the module itself.
+  const auto& args = forward->function().getSchema().arguments();
+  if (args.size() != 4)
+    throw std::invalid_argument(path + ": forward takes " +
+                                std::to_string(args.size() > 0 ? args.size() - 1 : 0) +
+                                " arguments: expected " + kSignature);
+  if (impl->module.hasattr("history_windows")) {
+    const torch::jit::IValue h = impl->module.attr("history_windows");
+    if (!h.isInt() || h.toInt() < 1 || h.toInt() > kMaxHistoryWindows)
+      throw std::invalid_argument(path + ": history_windows must be an integer from 1 to " +
+                                  std::to_string(kMaxHistoryWindows));
+    impl->history = static_cast<int>(h.toInt());
+  }
+  torch::Tensor out;
+  try {
+    out = impl->Forward();
+  } catch (const std::exception& e) {
+    std::string what = e.what();
+    if (const auto* c10 = dynamic_cast<const c10::Error*>(&e)) what = c10->what_without_backtrace();
+    throw std::invalid_argument(path + ": calling it on padding failed (" + FirstLine(what) +
+                                "): expected " + kSignature);
+  }
+  if (out.numel() != 3 || !out.is_floating_point())
+    throw std::invalid_argument(path + ": forward returned a " + std::string(out.dtype().name()) +
+                                " tensor of " + std::to_string(out.numel()) + " values: expected " +
+                                kSignature);
+  return std::unique_ptr<ScriptedEdge>(new ScriptedEdge(std::move(impl)));
+}
+
+std::optional<Eigen::Vector3d> ScriptedEdge::OnWindow(const WindowInputs& window) {
+  Impl& s = *impl_;
+  if (s.last_window && window.window <= *s.last_window)
+    throw std::invalid_argument("ScriptedEdge::OnWindow: window " + std::to_string(window.window) +
+                                " does not come after " + std::to_string(*s.last_window));
+  for (const auto& frames : window.frames)
+    for (const LatentFrame& f : frames) {
+      if (static_cast<int>(f.latent.size()) != s.latent_dim)
+        throw std::invalid_argument("ScriptedEdge::OnWindow: a latent of " +
+                                    std::to_string(f.latent.size()) + " values, expected " +
+                                    std::to_string(s.latent_dim));
+      s.has_seen_data = true;
+    }
+  // Skipped windows are empty ones.
+  const std::int64_t from = s.last_window ? *s.last_window + 1 : window.window;
+  for (std::int64_t k = std::max(from, window.window - s.history + 1); k < window.window; ++k) {
+    WindowInputs empty;
+    empty.window = k;
+    s.windows.push_back(std::move(empty));
+  }
+  s.windows.push_back(window);
+  while (static_cast<int>(s.windows.size()) > s.history) s.windows.pop_front();
+  s.last_window = window.window;
+  if (!s.has_seen_data) return std::nullopt;
+  torch::Tensor out;
+  try {
+    out = s.Forward().to(torch::kDouble).reshape({3}).contiguous();
+  } catch (const c10::Error& e) {
+    throw std::runtime_error("the TorchScript model failed at window " +
+                             std::to_string(window.window) + ": " +
+                             FirstLine(e.what_without_backtrace()));
+  }
+  const Eigen::Vector3d p(out[0].item<double>(), out[1].item<double>(), out[2].item<double>());
+  if (!p.allFinite()) return std::nullopt;
+  return p;
+}
+
+int ScriptedEdge::history_windows() const { return impl_->history; }
+int ScriptedEdge::latent_dim() const { return impl_->latent_dim; }
+
+}  // namespace uavsim::pipeline

@@ -1,0 +1,167 @@
+// Bring your own model (issue 22): a TorchScript edge model written with
+// Debian's python3-torch runs in the loop as a method of the user's name; it
+// is given exactly the latents that reached the edge on time (checked
+// against packets.csv, written by another part of the run), steers a beam,
+// is scored in metrics.json and in a sweep's summary.csv; a model of the
+// wrong signature is refused before the run starts.
+#include <catch2/catch.hpp>
+#include <filesystem>
+#include <map>
+#include <sstream>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "sim/core/json_io.h"
+#include "test_support.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using uavsim::core::Json;
+using uavsim::testing::ReadFile;
+using uavsim::testing::RunCli;
+using uavsim::testing::RunProgram;
+using uavsim::testing::TempDir;
+using uavsim::testing::WriteFile;
+
+const std::string kDefault = std::string(UAVSIM_SOURCE_DIR) + "/scenarios/default.json";
+// Debian's interpreter (python3-torch and python3-h5py are its packages;
+// another python3 on $PATH may lack them).
+const std::string kPython = "/usr/bin/python3";
+
+std::vector<std::string> Split(const std::string& s, char sep) {
+  std::vector<std::string> out;
+  std::string cell;
+  std::istringstream in(s);
+  while (std::getline(in, cell, sep)) out.push_back(cell);
+  return out;
+}
+
+// Scripts `module_source` (a Python class M(torch.nn.Module)) into `path`.
+void Script(const std::string& dir, const std::string& module_source, const std::string& path) {
+  const std::string py = dir + "/make.py";
+  WriteFile(py, "import torch\nfrom torch import Tensor\n" + module_source +
+                    "\ntorch.jit.script(M()).save('" + path + "')\n");
+  const auto r = RunProgram({kPython, py});
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+}
+
+// Returns, as the position, how many frames of each modality window L - 1
+// holds: the count the edge gave it.
+const char* const kCounts = R"(
+class M(torch.nn.Module):
+    history_windows: int
+    def __init__(self):
+        super().__init__()
+        self.history_windows = 3
+    def forward(self, latents: Tensor, offsets_s: Tensor, mask: Tensor) -> Tensor:
+        assert latents.dim() == 4 and latents.size(0) == 3 and latents.size(1) == 3
+        assert latents.size(3) == 16 and bool((offsets_s >= 0).all())
+        assert bool((offsets_s < 0.2).all())
+        return mask[-1].sum(-1).to(torch.float64)
+)";
+
+}  // namespace
+
+TEST_CASE(
+    "CLI: a TorchScript model from python3-torch runs in the loop under its name on the "
+    "latents that arrived on time, steers a beam and is scored in a sweep",
+    "[sim][byom][slow]") {
+  const std::string dir = TempDir("byom-run");
+  const std::string model = dir + "/counts.pt";
+  Script(dir, kCounts, model);
+  const std::string methods =
+      R"(/pipeline/methods=["ekf",{"type":"torchscript","name":"counts","edge":")" + model +
+      R"("}])";
+  const std::string out = dir + "/run";
+  const auto r = RunCli({"run", kDefault, "--duration", "3", "--out", out, "--quiet", "--set",
+                         methods, "--set", "/links/default/loss/p=0.2"});
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+
+  // What reached the edge by each window's deadline with a latent (more
+  // than the 16-byte header of a frame that found nothing), per modality.
+  std::map<std::pair<long, int>, int> delivered;  // (window k, modality) -> frames
+  const auto packets = Split(ReadFile(out + "/packets.csv"), '\n');
+  REQUIRE(packets.size() > 10);
+  const auto header = Split(packets[0], ',');
+  REQUIRE(header == std::vector<std::string>{"t_capture_s", "node", "modality", "sequence", "bytes",
+                                             "window", "status", "t_arrival_s", "latency_s"});
+  int lost = 0;
+  for (std::size_t i = 1; i < packets.size(); ++i) {
+    const auto c = Split(packets[i], ',');
+    REQUIRE(c.size() >= 7);  // a lost packet has no arrival time or latency
+    if (c[6] != "delivered") {
+      ++lost;
+      continue;
+    }
+    if (std::stoi(c[4]) <= 16) continue;
+    const int m = c[2] == "camera" ? 0 : c[2] == "lidar" ? 1 : 2;
+    ++delivered[{std::stol(c[5]) + 1, m}];
+  }
+  CHECK(lost > 0);  // the loss made some frames absent
+
+  // The model's answers: one per window from the first with data, each the
+  // counts the packets give.
+  const auto rows = Split(ReadFile(out + "/estimates.csv"), '\n');
+  int answered = 0;
+  for (std::size_t i = 1; i < rows.size(); ++i) {
+    const auto c = Split(rows[i], ',');
+    if (c.size() < 5 || c[1] != "counts") continue;
+    const long k = std::lround(std::stod(c[0]) / 0.2);
+    INFO("window " << k);
+    for (int m = 0; m < 3; ++m) CHECK(std::stod(c[2 + m]) == delivered[{k, m}]);
+    ++answered;
+  }
+  CHECK(answered >= 13);  // 15 windows in 3 s; the first with data at the latest the second
+
+  const Json metrics = uavsim::core::LoadJsonFile(out + "/metrics.json");
+  CHECK(metrics["rmse_m"].contains("counts"));
+  CHECK(metrics["uavloc_model"]["scripted"]["counts"] == model);
+  CHECK(ReadFile(out + "/rate_snr.csv").find(",counts,") != std::string::npos);
+
+  // A sweep: a column of its own.
+  const std::string spec = dir + "/spec.json";
+  WriteFile(
+      spec,
+      R"({"name": "byom", "scenario": ")" + kDefault +
+          R"(", "set": {"/duration_s": 2, "/pipeline/methods": ["ekf", {"type": "torchscript", "name": "counts", "edge": ")" +
+          model +
+          R"("}]}, "parameters": [{"name": "loss", "pointer": "/links/default/loss/p", "values": [0, 0.3]}], "seeds": {"from": 1, "count": 1}})");
+  const auto s = RunCli({"sweep", spec, "--out", dir + "/sweep", "--quiet"});
+  INFO(s.err);
+  REQUIRE(s.exit_code == 0);
+  const auto summary = Split(ReadFile(dir + "/sweep/summary.csv"), '\n');
+  REQUIRE(summary.size() == 3);
+  CHECK(summary[0].find("rmse_counts") != std::string::npos);
+}
+
+TEST_CASE("CLI: a TorchScript model of the wrong signature is refused before the run starts",
+          "[sim][byom]") {
+  const std::string dir = TempDir("byom-refused");
+  const std::string model = dir + "/two.pt";
+  Script(dir, R"(
+class M(torch.nn.Module):
+    def forward(self, latents: Tensor, mask: Tensor) -> Tensor:
+        return latents.sum() + mask.sum()
+)",
+         model);
+  const std::string out = dir + "/run";
+  for (const char* command : {"validate", "run"}) {
+    std::vector<std::string> args{
+        command, kDefault, "--set",
+        R"(/pipeline/methods=["ekf",{"type":"torchscript","name":"mine","edge":")" + model +
+            R"("}])"};
+    if (std::string(command) == "run") args.insert(args.end(), {"--out", out, "--quiet"});
+    const auto r = RunCli(args);
+    INFO(r.err);
+    CHECK(r.exit_code == 2);
+    CHECK(r.err.find("/pipeline/methods/1/edge: " + model +
+                     ": forward takes 2 arguments: "
+                     "expected forward(latents: float32 [L, 3, F, z]") != std::string::npos);
+    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+  }
+  CHECK_FALSE(fs::exists(out));
+}
