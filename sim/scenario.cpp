@@ -437,6 +437,20 @@ void ResolveCommandLinePaths(Json& doc, const std::vector<std::string>& override
     if (std::filesystem::path(value).is_relative())
       doc.at(at) = std::filesystem::absolute(value).lexically_normal().string();
   }
+  // A TorchScript method's file (/pipeline/methods/i/edge).
+  const Json::json_pointer methods("/pipeline/methods");
+  if (!doc.contains(methods) || !doc.at(methods).is_array()) return;
+  Json& list = doc.at(methods);
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    const std::string target = "/pipeline/methods/" + std::to_string(i) + "/edge";
+    bool set = false;
+    for (const std::string& o : overrides) set = set || Covers(o.substr(0, o.find('=')), target);
+    Json& e = list[i];
+    if (!set || !e.is_object() || !e.contains("edge") || !e["edge"].is_string()) continue;
+    const std::string value = e["edge"].get<std::string>();
+    if (!value.empty() && std::filesystem::path(value).is_relative())
+      e["edge"] = std::filesystem::absolute(value).lexically_normal().string();
+  }
 }
 
 }  // namespace

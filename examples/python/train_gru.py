@@ -5,7 +5,7 @@ and export it as TorchScript for `uavsim run`.
     build/uavsim dataset scenarios/default.json --episodes 40 --model models/default --out data.h5
     python3 examples/python/train_gru.py data.h5 --out mine.pt --seconds 60
     build/uavsim run scenarios/default.json \
-        --set '/pipeline/methods=["uavloc","ekf",{"type":"torchscript","name":"mine","edge":"../mine.pt"}]'
+        --set '/pipeline/methods=["uavloc","ekf",{"type":"torchscript","name":"mine","edge":"mine.pt"}]'
 
 The model gets, at each window, exactly what uavsim's edge gives a
 TorchScript method (pipeline/edge/scripted_edge.h; docs/dataset.md): for the

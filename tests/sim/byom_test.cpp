@@ -4,7 +4,9 @@
 // against packets.csv, written by another part of the run), steers a beam,
 // is scored in metrics.json and in a sweep's summary.csv; a model of the
 // wrong signature is refused before the run starts.
+#include <algorithm>
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <filesystem>
 #include <map>
 #include <sstream>
@@ -149,13 +151,13 @@ class M(torch.nn.Module):
 )",
          model);
   const std::string out = dir + "/run";
+  // The file named relative to the working directory, as --set paths are.
   for (const char* command : {"validate", "run"}) {
     std::vector<std::string> args{
         command, kDefault, "--set",
-        R"(/pipeline/methods=["ekf",{"type":"torchscript","name":"mine","edge":")" + model +
-            R"("}])"};
+        R"(/pipeline/methods=["ekf",{"type":"torchscript","name":"mine","edge":"two.pt"}])"};
     if (std::string(command) == "run") args.insert(args.end(), {"--out", out, "--quiet"});
-    const auto r = RunCli(args);
+    const auto r = RunCli(args, dir);
     INFO(r.err);
     CHECK(r.exit_code == 2);
     CHECK(r.err.find("/pipeline/methods/1/edge: " + model +
