@@ -313,6 +313,29 @@ void CheckTrainedModel(const Scenario& s, const std::string& file) {
   LoadScripted(s, file);
 }
 
+std::string CheckEncoderModel(const Scenario& s, const std::string& file, const std::string& dir,
+                              const std::string& command) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const std::string path = dir == "default" && !fs::exists(dir, ec)
+                               ? pipeline::DefaultModelPath()
+                               : pipeline::ModelManifestPath(dir);
+  const std::string what = command + ": --model " + dir + ": ";
+  if (!fs::is_regular_file(path, ec))
+    throw core::UsageError(what + "no trained model at " + path + " (" + kHowToTrain + ")");
+  pipeline::ModelManifest m;
+  try {
+    m = pipeline::ReadModelManifest(path);
+    const fs::path folder = fs::path(path).parent_path();
+    pipeline::VerifyModelChecksums(folder.empty() ? "." : folder.string());
+  } catch (const core::ConfigError& e) {
+    throw core::UsageError(what + e.what());
+  }
+  CheckManifestFits(s, file, path, m);
+  RequireRawFits(s, file, path, m);
+  return path;
+}
+
 EdgeServer::EdgeServer(const Scenario& s, const std::string& scenario_file, bool quiet,
                        bool methods)
     : scenario_(s),

@@ -72,6 +72,18 @@ bool NeedsTrainedModel(const Scenario& s);
 // core::ConfigError naming `file` and the scenario's pointer.
 void CheckTrainedModel(const Scenario& s, const std::string& file);
 
+// A model folder (or its manifest; "default": the shipped model) whose node
+// encoders a command runs on the scenario's observations outside the loop
+// (`uavsim dataset --model DIR`): what CheckTrainedModel checks of
+// /pipeline/model that concerns the encoders. The manifest exists and
+// parses, the folder's checksums hold, its latent size and window length are
+// the scenario's, and a raw-variant model meets raw pre-processing. Returns
+// the manifest's path. Throws core::UsageError "COMMAND: --model DIR: ..."
+// for a missing or broken model, core::ConfigError naming `file` and the
+// scenario's pointer for one that does not fit.
+std::string CheckEncoderModel(const Scenario& s, const std::string& file, const std::string& dir,
+                              const std::string& command);
+
 // The `ekf` method as a run builds it: the scenario's EkfConfig with the
 // target's limits and size, every node's sensor added under its id.
 std::unique_ptr<pipeline::Ekf> MakeEkf(const Scenario& s);

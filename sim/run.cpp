@@ -65,7 +65,7 @@ class TruthSampler {
 using Uplinks = std::map<std::string, std::unique_ptr<channel::Uplink>>;
 
 // One uplink per entry of /links, shared by the nodes that name it; what
-// arrives goes to the edge server (and, on time, to the collector).
+// arrives or is lost goes to the edge server (and to the collector).
 Uplinks MakeUplinks(core::Simulator& sim, const Scenario& s, EdgeServer& edge,
                     TrainingCollector* collector) {
   std::vector<std::string> node_ids;
@@ -75,11 +75,16 @@ Uplinks MakeUplinks(core::Simulator& sim, const Scenario& s, EdgeServer& edge,
     auto link = std::make_unique<channel::Uplink>(
         sim, config, s.weather, core::RngStream(s.seed, "link/" + name), node_ids);
     link->SetArrivalCallback([&edge, collector](const channel::Message& m, core::SimTime t) {
-      if (edge.OnArrival(m, t) && collector)
-        collector->OnArrival(*static_cast<const NodeContent*>(m.content.get()));
+      const bool on_time = edge.OnArrival(m, t);
+      if (collector && m.content)
+        collector->OnArrival(*static_cast<const NodeContent*>(m.content.get()), core::ToSeconds(t),
+                             on_time);
     });
-    link->SetLossCallback(
-        [&edge](const channel::Message& m, channel::LossCause) { edge.OnLost(m); });
+    link->SetLossCallback([&edge, collector](const channel::Message& m, channel::LossCause) {
+      edge.OnLost(m);
+      if (collector && m.content)
+        collector->OnLost(*static_cast<const NodeContent*>(m.content.get()));
+    });
     links.emplace(name, std::move(link));
   }
   return links;

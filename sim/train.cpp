@@ -180,9 +180,10 @@ pipeline::Episode SimulatePlannedEpisode(const Scenario& base, const EpisodePlan
 // Each episode in a child process of its own (sim/process_farm.h), written
 // to <folder>/episode.bin; rank 0 reads them back in episode order, so the
 // episodes are the same whatever the jobs or ranks.
-ProcessFarm EpisodeFarm(const Scenario& base, const EpisodePlan& plan, const fs::path& scratch) {
+ProcessFarm EpisodeFarm(const Scenario& base, const EpisodePlan& plan, const fs::path& scratch,
+                        const std::string& command) {
   ProcessFarm farm;
-  farm.command = "uavsim train";
+  farm.command = command;
   farm.unit = "episodes";
   farm.run = [&base, &plan](std::size_t i, const std::string& dir) {
     fs::create_directories(dir);
@@ -203,9 +204,10 @@ ProcessFarm EpisodeFarm(const Scenario& base, const EpisodePlan& plan, const fs:
 
 // Reads the farm's episodes back in order; throws if one failed.
 std::vector<pipeline::Episode> CollectEpisodes(const fs::path& scratch, int count,
-                                               const FarmCounts& counts) {
+                                               const FarmCounts& counts,
+                                               const std::string& command) {
   if (counts.failed > 0)
-    throw std::runtime_error("uavsim train: " + std::to_string(counts.failed) + " of " +
+    throw std::runtime_error(command + ": " + std::to_string(counts.failed) + " of " +
                              std::to_string(count) +
                              " training episodes failed (their errors are above)");
   std::vector<pipeline::Episode> episodes;
@@ -213,7 +215,7 @@ std::vector<pipeline::Episode> CollectEpisodes(const fs::path& scratch, int coun
     std::vector<pipeline::Episode> one =
         pipeline::ReadEpisodes((scratch / std::to_string(i) / "episode.bin").string());
     if (one.size() != 1)
-      throw std::runtime_error("uavsim train: episode " + std::to_string(i) + " file is damaged");
+      throw std::runtime_error(command + ": episode " + std::to_string(i) + " file is damaged");
     episodes.push_back(std::move(one.front()));
   }
   return episodes;
@@ -237,7 +239,7 @@ std::vector<pipeline::Episode> SimulateEpisodes(const Scenario& base, const Epis
                                                 const EpisodeJobs& jobs) {
   const bool mpi = jobs.world != nullptr;
   if (jobs.jobs <= 1 && !mpi) return SimulateEpisodes(base, plan, jobs.quiet);
-  const ProcessFarm farm = EpisodeFarm(base, plan, jobs.scratch_dir);
+  const ProcessFarm farm = EpisodeFarm(base, plan, jobs.scratch_dir, jobs.command);
   FarmOptions fo;
   fo.jobs = jobs.jobs;
   fo.quiet = jobs.quiet;
@@ -251,14 +253,15 @@ std::vector<pipeline::Episode> SimulateEpisodes(const Scenario& base, const Epis
   const FarmCounts counts = mpi ? RunFarmCoordinator(*jobs.world, farm, std::move(queue), fo)
                                 : RunFarmLocal(farm, std::move(queue), fo);
   std::vector<pipeline::Episode> episodes =
-      CollectEpisodes(jobs.scratch_dir, plan.episodes, counts);
+      CollectEpisodes(jobs.scratch_dir, plan.episodes, counts, jobs.command);
   std::error_code ec;
   fs::remove_all(jobs.scratch_dir, ec);
   return episodes;
 }
 
 SavedEpisodes ReadSavedEpisodes(const Scenario& base, const EpisodePlan& plan, int count,
-                                bool keep_length, const std::string& file) {
+                                bool keep_length, const std::string& file,
+                                const std::string& command) {
   SavedEpisodes saved;
   saved.episodes = pipeline::ReadEpisodes(file);
   std::vector<pipeline::Episode>& held = saved.episodes;
@@ -278,8 +281,8 @@ SavedEpisodes ReadSavedEpisodes(const Scenario& base, const EpisodePlan& plan, i
     return saved;
   }
   // Extending: the set must be this plan's, or the result would mix two.
-  const auto refuse = [&file](const std::string& why) {
-    throw core::UsageError("uavsim train: " + file + ": cannot extend these episodes: " + why);
+  const auto refuse = [&file, &command](const std::string& why) {
+    throw core::UsageError(command + ": " + file + ": cannot extend these episodes: " + why);
   };
   for (std::size_t i = 0; i < held.size(); ++i) {
     const pipeline::Episode& e = held[i];
@@ -444,7 +447,7 @@ std::optional<pipeline::TrainReport> RunTraining(const Scenario& base, const Tra
     env = std::make_unique<boost::mpi::environment>();
     world = std::make_unique<boost::mpi::communicator>();
   }
-  EpisodeJobs jobs{c.jobs, c.quiet, "", world.get()};
+  EpisodeJobs jobs{c.jobs, c.quiet, "", world.get(), "uavsim train"};
   // What is left to simulate, rank 0 tells the others: [first, first + count)
   // episodes of `length` s.
   const auto share_plan = [&world](EpisodePlan& p) {

@@ -54,6 +54,7 @@ struct EpisodeJobs {
   bool quiet = false;
   std::string scratch_dir;                    // rank 0: where the children write (removed after)
   boost::mpi::communicator* world = nullptr;  // under mpirun, else null
+  std::string command = "uavsim train";       // names the command in messages
 };
 // The same episodes, byte for byte, whatever `jobs` and the ranks. At rank
 // 0 (or without MPI) returns them; other ranks return nothing once rank 0
@@ -67,7 +68,7 @@ std::vector<pipeline::Episode> SimulateEpisodes(const Scenario& base, const Epis
 // holds, `missing.episodes` = how many more, 0 when none). Episode i depends
 // only on the scenario, the seed and i, so the extended set is the one a
 // fresh simulation of `count` episodes gives. Throws core::UsageError naming
-// FILE when extending a set made with another seed or scenario (an episode's
+// FILE (after `command`) when extending a set made with another seed or scenario (an episode's
 // label differs from what `plan` draws) or with another episode length
 // (`plan.episode_s`, unless `keep_length`: then FILE's length is used).
 struct SavedEpisodes {
@@ -75,7 +76,8 @@ struct SavedEpisodes {
   EpisodePlan missing;
 };
 SavedEpisodes ReadSavedEpisodes(const Scenario& base, const EpisodePlan& plan, int count,
-                                bool keep_length, const std::string& file);
+                                bool keep_length, const std::string& file,
+                                const std::string& command = "uavsim train");
 
 // Splits by trajectory: 15 % test and 15 % validation (at least one each when
 // there are three or more episodes), the rest training; which episode goes

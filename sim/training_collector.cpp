@@ -22,8 +22,17 @@ void TrainingCollector::OnFrame(const SensingNode& node, double t_s, NodeContent
   episode_.samples.push_back(std::move(sample));
 }
 
-void TrainingCollector::OnArrival(const NodeContent& content) {
-  if (content.FoundSomething()) episode_.samples[content.sample].on_time = true;
+void TrainingCollector::OnArrival(const NodeContent& content, double t_arrival_s, bool on_time) {
+  if (!content.FoundSomething()) return;
+  pipeline::Sample& sample = episode_.samples[content.sample];
+  if (on_time) sample.on_time = true;
+  sample.fate = on_time ? pipeline::SampleFate::kOnTime : pipeline::SampleFate::kLate;
+  sample.t_arrival_s = t_arrival_s;
+}
+
+void TrainingCollector::OnLost(const NodeContent& content) {
+  if (!content.FoundSomething()) return;
+  episode_.samples[content.sample].fate = pipeline::SampleFate::kLost;
 }
 
 void TrainingCollector::OnWindow(core::SimTime t_window_end, const Eigen::Vector3d& truth_m) {

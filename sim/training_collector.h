@@ -1,8 +1,10 @@
 // Training data from a run (sim/train.h): observes the sensing nodes' frames,
-// the edge's on-time arrivals and the windows' ends, and fills an Episode
-// (pipeline/training/dataset.h): every frame whose pre-processing found
-// something, with the truth at its capture time and whether it reached the
-// edge in time, and the truth at every window's end up to the run's end.
+// every message's fate at the edge (on time, late, lost) and the windows'
+// ends, and fills an Episode (pipeline/training/dataset.h): every frame whose
+// pre-processing found something, with the truth at its capture time, when
+// and whether it reached the edge, and the truth at every window's end up to
+// the run's end. A sample whose message is neither arrived nor lost when the
+// run ends keeps the fate kInFlight and no arrival time.
 #pragma once
 
 #include "pipeline/training/dataset.h"
@@ -20,8 +22,12 @@ class TrainingCollector {
 
   // A node's frame that found something (tags `content` with its sample).
   void OnFrame(const SensingNode& node, double t_s, NodeContent& content);
-  // A message that arrived on time with `content`.
-  void OnArrival(const NodeContent& content);
+  // A message with `content` arrived at the edge at t_arrival_s (simulated
+  // seconds), by its window's deadline (`on_time`, as the edge decided) or
+  // after it. Messages that carry nothing are ignored.
+  void OnArrival(const NodeContent& content, double t_arrival_s, bool on_time);
+  // A message with `content` was lost on the uplink.
+  void OnLost(const NodeContent& content);
   // A window's deadline passed; the window ended at t_window_end.
   void OnWindow(core::SimTime t_window_end, const Eigen::Vector3d& truth_m);
 

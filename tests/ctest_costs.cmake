@@ -11,7 +11,9 @@ foreach(entry
     "The default model: three modalities beat each single one on held-out trajectories=115"
     "CLI: train --jobs 2 and mpirun simulate the episodes one job does, byte for byte, and extend a saved set exactly=150"
     "Kill: training killed at random moments leaves no half-written model or data=90"
-    "CLI: train --variant trains a variant on shared encoders that runs in the loop under its name and on modality subsets=60")
+    "CLI: train --variant trains a variant on shared encoders that runs in the loop under its name and on modality subsets=60"
+    "CLI: dataset writes every field of the training episodes to HDF5, the same bytes whatever --jobs or mpirun, with the node encoders' latents given a model=60"
+    "Kill: a dataset export killed at random moments leaves no half-written file=40")
   string(FIND "${entry}" "=" at REVERSE)
   string(SUBSTRING "${entry}" 0 ${at} name)
   math(EXPR from "${at} + 1")

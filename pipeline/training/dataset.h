@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -17,12 +18,32 @@
 
 namespace uavsim::pipeline {
 
+// What became of a sample's message on the uplink (channel/edge_receiver.h:
+// a window's deadline is its end plus the late allowance). The values are
+// stored in episode files and in `uavsim dataset` files: do not renumber.
+enum class SampleFate : std::uint8_t {
+  kOnTime = 0,    // arrived by its window's deadline (on_time)
+  kLate = 1,      // arrived after it (the edge treats it as missing)
+  kLost = 2,      // never arrives (the uplink dropped it)
+  kInFlight = 3,  // still on the uplink when the episode ended
+  // An episode file of version 01 kept on_time only: a sample that was not
+  // on time was late, lost or in flight, which it did not record.
+  kUnknown = 255,
+};
+// "on_time", "late", "lost", "in_flight", "unknown".
+const char* SampleFateName(SampleFate f);
+
 // One node frame whose pre-processing found something to send.
 struct Sample {
   Modality modality = Modality::kCamera;
   std::uint32_t node = 0;  // index of the node in its scenario
-  double t_s = 0.0;        // capture time
+  double t_s = 0.0;        // capture time, simulated seconds
   bool on_time = false;    // arrived at the edge before its window's deadline
+  // How the message fared, and when it arrived at the edge (simulated
+  // seconds; NaN unless the fate is kOnTime or kLate, or when unknown).
+  // on_time == (fate == SampleFate::kOnTime) for simulated samples.
+  SampleFate fate = SampleFate::kInFlight;
+  double t_arrival_s = std::numeric_limits<double>::quiet_NaN();
   Eigen::Vector3d truth_m = Eigen::Vector3d::Zero();  // target position at t_s
   std::optional<CameraObservation> camera;            // set for the camera
   std::optional<PointObservation> points;             // set for LiDAR and radar

@@ -10,13 +10,17 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <stdexcept>
 #include <type_traits>
 
 namespace uavsim::pipeline {
 namespace {
 
-constexpr char kMagic[8] = {'U', 'A', 'V', 'E', 'P', 'S', '0', '1'};
+// Version 02 adds each sample's fate and arrival time after on_time;
+// version 01 files (without them) still read.
+constexpr char kMagic[8] = {'U', 'A', 'V', 'E', 'P', 'S', '0', '2'};
+constexpr char kMagicV01[8] = {'U', 'A', 'V', 'E', 'P', 'S', '0', '1'};
 constexpr std::uint64_t kMaxCount = 1ull << 32;
 
 class Writer {
@@ -40,8 +44,7 @@ class Writer {
   // Grey values k / 255 as the bytes k.
   void Grey(const std::vector<float>& v) {
     std::vector<std::uint8_t> b(v.size());
-    for (std::size_t i = 0; i < v.size(); ++i)
-      b[i] = static_cast<std::uint8_t>(std::lround(std::clamp(v[i], 0.0f, 1.0f) * 255.0f));
+    for (std::size_t i = 0; i < v.size(); ++i) b[i] = GreyByte(v[i]);
     Pod<std::uint64_t>(b.size());
     out_.write(reinterpret_cast<const char*>(b.data()), static_cast<std::streamsize>(b.size()));
   }
@@ -90,11 +93,7 @@ class Reader {
     std::vector<std::uint8_t> b(Count(1));
     in_.read(reinterpret_cast<char*>(b.data()), static_cast<std::streamsize>(b.size()));
     if (!in_) Fail("truncated");
-    // The same conversion as the camera pre-processor's (OpenCV's), so a
-    // crop read back is bit for bit the crop that was simulated.
-    cv::Mat f;
-    cv::Mat(1, static_cast<int>(b.size()), CV_8UC1, b.data()).convertTo(f, CV_32F, 1.0 / 255.0);
-    return std::vector<float>(f.ptr<float>(), f.ptr<float>() + f.total());
+    return GreyFloats(b.data(), b.size());
   }
   [[noreturn]] void Fail(const std::string& what) const {
     throw std::runtime_error(path_ + ": " + what + " (not an episode file of this uavsim?)");
@@ -107,6 +106,19 @@ class Reader {
 };
 
 }  // namespace
+
+std::uint8_t GreyByte(float v) {
+  return static_cast<std::uint8_t>(std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f));
+}
+
+std::vector<float> GreyFloats(const std::uint8_t* bytes, std::size_t n) {
+  if (n == 0) return {};
+  // The same conversion as the camera pre-processor's (OpenCV's).
+  cv::Mat f;
+  cv::Mat(1, static_cast<int>(n), CV_8UC1, const_cast<std::uint8_t*>(bytes))
+      .convertTo(f, CV_32F, 1.0 / 255.0);
+  return std::vector<float>(f.ptr<float>(), f.ptr<float>() + f.total());
+}
 
 void WriteEpisodes(const std::vector<Episode>& episodes, const std::string& path) {
   for (const Episode& e : episodes)
@@ -132,6 +144,8 @@ void WriteEpisodes(const std::vector<Episode>& episodes, const std::string& path
         w.Pod(s.node);
         w.Pod(s.t_s);
         w.Pod<std::uint8_t>(s.on_time);
+        w.Pod<std::uint8_t>(static_cast<std::uint8_t>(s.fate));
+        w.Pod(s.t_arrival_s);
         w.Vec3(s.truth_m);
         w.Pod<std::uint8_t>(s.camera ? 1 : 2);
         if (const auto& c = s.camera) {
@@ -178,6 +192,22 @@ std::vector<Sample>& SampleList::Own() {
   return *p_;
 }
 
+const char* SampleFateName(SampleFate f) {
+  switch (f) {
+    case SampleFate::kOnTime:
+      return "on_time";
+    case SampleFate::kLate:
+      return "late";
+    case SampleFate::kLost:
+      return "lost";
+    case SampleFate::kInFlight:
+      return "in_flight";
+    case SampleFate::kUnknown:
+      break;
+  }
+  return "unknown";
+}
+
 const char* DataSplitName(DataSplit s) { return s == DataSplit::kFrame ? "frame" : "trajectory"; }
 
 std::string WeatherOf(const Episode& e) {
@@ -195,14 +225,16 @@ std::vector<Episode> ReadEpisodes(const std::string& path) {
   Reader r(in, path, size);
   char magic[sizeof kMagic];
   in.read(magic, sizeof magic);
-  if (!in || std::memcmp(magic, kMagic, sizeof kMagic) != 0) r.Fail("not an episode file");
+  const bool v01 = in && std::memcmp(magic, kMagicV01, sizeof kMagicV01) == 0;
+  if (!in || (!v01 && std::memcmp(magic, kMagic, sizeof kMagic) != 0))
+    r.Fail("not an episode file");
   std::vector<Episode> episodes(r.Count(8));
   for (Episode& e : episodes) {
     e.label = r.String();
     e.window_s = r.Pod<double>();
     e.window_truth.resize(r.Count(24));
     for (auto& p : e.window_truth) p = r.Vec3();
-    e.samples.resize(r.Count(50));
+    e.samples.resize(r.Count(v01 ? 50 : 59));
     for (Sample& s : e.samples) {
       const auto m = r.Pod<std::uint8_t>();
       if (m >= kModalityCount) r.Fail("corrupt (modality " + std::to_string(m) + ")");
@@ -210,6 +242,17 @@ std::vector<Episode> ReadEpisodes(const std::string& path) {
       s.node = r.Pod<std::uint32_t>();
       s.t_s = r.Pod<double>();
       s.on_time = r.Pod<std::uint8_t>() != 0;
+      if (v01) {
+        s.fate = s.on_time ? SampleFate::kOnTime : SampleFate::kUnknown;
+        s.t_arrival_s = std::numeric_limits<double>::quiet_NaN();
+      } else {
+        const auto fate = r.Pod<std::uint8_t>();
+        if (fate > static_cast<std::uint8_t>(SampleFate::kInFlight) &&
+            fate != static_cast<std::uint8_t>(SampleFate::kUnknown))
+          r.Fail("corrupt (fate " + std::to_string(fate) + ")");
+        s.fate = static_cast<SampleFate>(fate);
+        s.t_arrival_s = r.Pod<double>();
+      }
       s.truth_m = r.Vec3();
       const auto kind = r.Pod<std::uint8_t>();
       if ((kind == 1) != (s.modality == Modality::kCamera))

@@ -1,14 +1,43 @@
 // Training episodes on disk (`uavsim train --data FILE`): simulate once, train
 // many times. A versioned little-endian binary file; camera crops are stored
 // as the 8-bit grey values they were made from (lossless).
+//
+// Versions (the 8-byte magic): "UAVEPS02" (written) stores each sample's
+// fate and arrival time; "UAVEPS01" (read) has neither: its samples read
+// with fate kOnTime when on time, else kUnknown, and a NaN arrival time.
+//
+// Layout of version 02 (v01: the same without the two fields marked *):
+//   magic[8], u64 episodes, then per episode:
+//     string label (u64 size + bytes), f64 window_s,
+//     u64 K, K x vec3 window truth (vec3 = 3 x f64),
+//     u64 N, N samples:
+//       u8 modality, u32 node, f64 t_s, u8 on_time, *u8 fate, *f64 t_arrival_s,
+//       vec3 truth, u8 kind (1 camera, 2 points), then
+//       camera: f64 t_s, u8 detected, u64 n + n grey bytes (left crop), the
+//               same (right crop), 6 x f32 (centre left x, y, centre right
+//               x, y, side left, side right), 4 x vec3 (eye left, eye right,
+//               bearing left, bearing right)
+//       points: f64 t_s, i32 channels, u64 n + n x f32 values,
+//               vec3 sensor position
 #pragma once
 
+#include <cstddef>
+#include <cstdint>
 #include <string>
 #include <vector>
 
 #include "pipeline/training/dataset.h"
 
 namespace uavsim::pipeline {
+
+// A crop's grey value as the byte stored for it (here and by `uavsim
+// dataset`): round(clamp(v, 0, 1) * 255). The camera pre-processor makes its
+// values from bytes (GreyFloats), so for them the byte is exact: lossless.
+std::uint8_t GreyByte(float v);
+// Bytes k as the camera pre-processor's floats: OpenCV's convertTo with
+// scale 1 / 255 (not always the float k / 255.0f), so that a crop read back
+// is bit for bit the crop that was simulated.
+std::vector<float> GreyFloats(const std::uint8_t* bytes, std::size_t n);
 
 // Writes atomically (temp file, then rename). Throws std::runtime_error
 // naming the path.

@@ -43,7 +43,7 @@ TEST_CASE("CLI: --version, --help and every subcommand's --help", "[sim][slow]")
   auto v = RunCli({"--version"});
   CHECK(v.exit_code == 0);
   CHECK_THAT(v.out, Catch::StartsWith("uavsim 0.1.0"));
-  for (const char* cmd : {"validate", "run", "sweep", "train", "bench", "report"}) {
+  for (const char* cmd : {"validate", "run", "sweep", "train", "dataset", "bench", "report"}) {
     INFO(cmd);
     auto r = RunCli({cmd, "--help"});
     CHECK(r.exit_code == 0);

@@ -1,7 +1,8 @@
 // Killed and interrupted commands (issue 24): SIGKILL at random moments
 // leaves no half-written file under a final name, and the next command
 // leaves no staging folder; SIGTERM and SIGINT stop even a single heavy
-// capture promptly. (The sweep's own kill tests are in sweep_test.cpp.)
+// capture promptly. (The sweep's own kill tests are in sweep_test.cpp.) A
+// killed dataset export leaves no half-written HDF5 file.
 #include <signal.h>
 
 #include <catch2/catch.hpp>
@@ -133,6 +134,46 @@ TEST_CASE("Kill: training killed at random moments leaves no half-written model 
   REQUIRE(r.exit_code == 0);
   CHECK_FALSE(HasStaging(dir));
   CHECK(ReadFile(model + "/uavloc.pt") == ReadFile(dir + "/ref/uavloc.pt"));
+}
+
+TEST_CASE("Kill: a dataset export killed at random moments leaves no half-written file",
+          "[sim][kill][dataset][slow]") {
+  const std::string dir = TempDir("kill-dataset");
+  // Two short episodes two at a time (so staging folders exist), encoded
+  // by the shipped model: simulation, encoding and writing over the span.
+  const auto args = [&](const std::string& out) {
+    return std::vector<std::string>{
+        "dataset",     kDefault,
+        "--episodes",  "2",
+        "--episode-s", "2",
+        "--jobs",      "2",
+        "--model",     std::string(UAVSIM_SOURCE_DIR) + "/models/default",
+        "--out",       out,
+        "--quiet"};
+  };
+  const std::string ref = dir + "/ref.h5", out = dir + "/out.h5";
+  const double span_s = TimedRun(args(ref));
+  const auto temporaries = [&dir] {
+    std::vector<std::string> found = StagingFolders(dir);
+    for (const auto& e : fs::directory_iterator(dir))
+      if (e.path().filename().string().find(".tmp-") != std::string::npos)
+        found.push_back(e.path().string());
+    return found;
+  };
+  KillAtRandomMoments(args(out), dir + "/log", span_s, 3, [&] {
+    // Renamed into place whole, or not there at all.
+    if (fs::exists(out)) {
+      CHECK(ReadFile(out) == ReadFile(ref));
+      fs::remove(out);
+    }
+  });
+  // The next export removes what the killed ones left, and writes the
+  // reference's bytes.
+  const auto r = RunCli(args(out));
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  CHECK(temporaries().empty());
+  CHECK(ReadFile(out) == ReadFile(ref));
 }
 
 TEST_CASE("Kill: SIGTERM or SIGINT inside one heavy capture stops the run at once",

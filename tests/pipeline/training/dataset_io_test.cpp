@@ -1,8 +1,12 @@
 // The training-episode file (pipeline/training/dataset_io.h): every field survives a
-// round trip, camera crops as 8-bit greys, and a truncated, foreign or
+// round trip (the fates and arrival times of version 02 too), camera crops as
+// 8-bit greys, a version 01 file still reads, and a truncated, foreign or
 // missing file is refused with its path named.
 #include <catch2/catch.hpp>
+#include <cmath>
+#include <cstring>
 #include <filesystem>
+#include <limits>
 #include <opencv2/core.hpp>
 #include <stdexcept>
 #include <string>
@@ -88,6 +92,16 @@ std::vector<Episode> SomeEpisodes() {
   Sample undetected = CameraSample(0.1, 5, true, 0, 0);                   // no crops at all
   undetected.camera->detected = false;
   a.samples.push_back(undetected);
+  // Every fate, with arrival times where they arrived.
+  const SampleFate fates[] = {SampleFate::kOnTime, SampleFate::kOnTime, SampleFate::kLate,
+                              SampleFate::kLost,   SampleFate::kOnTime, SampleFate::kInFlight,
+                              SampleFate::kOnTime};
+  for (std::size_t i = 0; i < a.samples.size(); ++i) {
+    Sample& s = a.samples[i];
+    s.fate = fates[i];
+    if (s.fate == SampleFate::kOnTime || s.fate == SampleFate::kLate)
+      s.t_arrival_s = s.t_s + 0.0123 * static_cast<double>(i + 1);
+  }
   for (int k = 1; k <= 4; ++k) a.window_truth.push_back({0.1 * k, -0.2 * k, 30.0 + k / 7.0});
 
   Episode& b = episodes[1];  // nothing at all
@@ -98,6 +112,7 @@ std::vector<Episode> SomeEpisodes() {
   c.label = "line seed 3 \xc3\xa9t\xc3\xa9";
   c.window_s = 0.5;
   c.samples.push_back(PointSample(Modality::kRadar, 1.0, 9, true, 2));
+  c.samples[0].fate = SampleFate::kUnknown;  // as read from a version 01 file
   c.window_truth.push_back({1.0, 2.0, 3.0});
   return episodes;
 }
@@ -107,6 +122,9 @@ void CheckSameSample(const Sample& a, const Sample& b) {
   CHECK(a.node == b.node);
   CHECK(a.t_s == b.t_s);
   CHECK(a.on_time == b.on_time);
+  CHECK(a.fate == b.fate);
+  // The same double, NaN included.
+  CHECK(std::memcmp(&a.t_arrival_s, &b.t_arrival_s, sizeof(double)) == 0);
   CHECK(a.truth_m == b.truth_m);
   REQUIRE(a.camera.has_value() == b.camera.has_value());
   REQUIRE(a.points.has_value() == b.points.has_value());
@@ -185,6 +203,116 @@ TEST_CASE("DatasetIo: every field survives a round trip", "[pipeline]") {
   // No episodes at all is a valid file too.
   WriteEpisodes({}, dir + "/none.bin");
   CHECK(ReadEpisodes(dir + "/none.bin").empty());
+}
+
+// Bytes of a little-endian file, appended field by field (this machine is
+// little-endian, as the episode file is).
+struct Bytes {
+  std::string b;
+  template <class T>
+  Bytes& Pod(T v) {
+    b.append(reinterpret_cast<const char*>(&v), sizeof v);
+    return *this;
+  }
+  Bytes& Vec3(double x, double y, double z) { return Pod(x).Pod(y).Pod(z); }
+};
+
+TEST_CASE("DatasetIo: a version 01 file (no fates, no arrival times) still reads", "[pipeline]") {
+  // The version 01 layout, written by hand as the old writer wrote it: one
+  // episode with a camera sample on time and a radar sample that was not.
+  Bytes f;
+  f.b = "UAVEPS01";
+  f.Pod<std::uint64_t>(1);
+  const std::string label = "orbit r 40 m, loss 12 %";
+  f.Pod<std::uint64_t>(label.size());
+  f.b += label;
+  f.Pod(0.2);
+  f.Pod<std::uint64_t>(2).Vec3(1, 2, 3).Vec3(4, 5, 6);  // window truths
+  f.Pod<std::uint64_t>(2);                              // samples
+  // The camera sample: 2 x 2 crops of greys 0, 64, 128, 255 and 1, 2, 3, 4.
+  f.Pod<std::uint8_t>(0).Pod<std::uint32_t>(3).Pod(0.0331).Pod<std::uint8_t>(1);
+  f.Vec3(10, 20, 30).Pod<std::uint8_t>(1);
+  f.Pod(0.033).Pod<std::uint8_t>(1);
+  f.Pod<std::uint64_t>(4);
+  f.b += std::string("\x00\x40\x80\xff", 4);
+  f.Pod<std::uint64_t>(4);
+  f.b += std::string("\x01\x02\x03\x04", 4);
+  for (float g : {321.5f, 199.25f, 300.125f, 200.75f, 41.0f, 39.5f}) f.Pod(g);
+  f.Vec3(-1, 0, 1).Vec3(1, 0, 1).Vec3(0, 1, 0).Vec3(0, 0, 1);
+  // The radar sample: 2 points of 5 channels.
+  f.Pod<std::uint8_t>(2).Pod<std::uint32_t>(7).Pod(0.0667).Pod<std::uint8_t>(0);
+  f.Vec3(11, 21, 31).Pod<std::uint8_t>(2);
+  f.Pod(0.0666).Pod<std::int32_t>(5).Pod<std::uint64_t>(10);
+  for (int i = 0; i < 10; ++i) f.Pod(0.5f * static_cast<float>(i));
+  f.Vec3(-24, 24, 1.5);
+
+  const std::string path = testing::TempDir("dataset-io-v01") + "/v01.bin";
+  testing::WriteFile(path, f.b);
+  const std::vector<Episode> read = ReadEpisodes(path);
+  REQUIRE(read.size() == 1);
+  const Episode& e = read[0];
+  CHECK(e.label == label);
+  CHECK(e.window_s == 0.2);
+  CHECK(e.window_truth ==
+        std::vector<Eigen::Vector3d>{Eigen::Vector3d(1, 2, 3), Eigen::Vector3d(4, 5, 6)});
+  REQUIRE(e.samples.size() == 2);
+  const Sample& cam = e.samples[0];
+  CHECK(cam.modality == Modality::kCamera);
+  CHECK(cam.node == 3);
+  CHECK(cam.t_s == 0.0331);
+  CHECK(cam.on_time);
+  CHECK(cam.fate == SampleFate::kOnTime);  // on time: the one fate v01 knew
+  CHECK(std::isnan(cam.t_arrival_s));      // but not when
+  CHECK(cam.truth_m == Eigen::Vector3d(10, 20, 30));
+  REQUIRE(cam.camera.has_value());
+  CHECK(cam.camera->t_s == 0.033);
+  CHECK(cam.camera->detected);
+  CHECK(cam.camera->crop_left == std::vector<float>{Grey(0), Grey(64), Grey(128), Grey(255)});
+  CHECK(cam.camera->crop_right == std::vector<float>{Grey(1), Grey(2), Grey(3), Grey(4)});
+  CHECK(cam.camera->centre_right_px == Eigen::Vector2f(300.125f, 200.75f));
+  CHECK(cam.camera->side_right_px == 39.5f);
+  CHECK(cam.camera->bearing_right_w == Eigen::Vector3d(0, 0, 1));
+  const Sample& radar = e.samples[1];
+  CHECK(radar.modality == Modality::kRadar);
+  CHECK(radar.node == 7);
+  CHECK_FALSE(radar.on_time);
+  CHECK(radar.fate == SampleFate::kUnknown);  // late, lost or in flight: v01 did not say
+  CHECK(std::string(SampleFateName(radar.fate)) == "unknown");
+  CHECK(std::isnan(radar.t_arrival_s));
+  REQUIRE(radar.points.has_value());
+  CHECK(radar.points->channels == 5);
+  CHECK(radar.points->values.size() == 10);
+  CHECK(radar.points->values[9] == 4.5f);
+  CHECK(radar.points->sensor_position_w == Eigen::Vector3d(-24, 24, 1.5));
+
+  // Rewritten, it is a version 02 file that reads back the same.
+  const std::string v02 = testing::TempDir("dataset-io-v01") + "/v02.bin";
+  WriteEpisodes(read, v02);
+  CHECK(testing::ReadFile(v02).substr(0, 8) == "UAVEPS02");
+  const std::vector<Episode> again = ReadEpisodes(v02);
+  REQUIRE(again.size() == 1);
+  REQUIRE(again[0].samples.size() == 2);
+  for (std::size_t i = 0; i < 2; ++i) CheckSameSample(again[0].samples[i], e.samples[i]);
+}
+
+TEST_CASE("DatasetIo: a sample's fate outside the known values is refused", "[pipeline]") {
+  const std::string dir = testing::TempDir("dataset-io-fate");
+  const std::string path = dir + "/episodes.bin";
+  std::vector<Episode> episodes(1);
+  episodes[0].samples.push_back(PointSample(Modality::kLidar, 0.05, 1, false, 1));
+  episodes[0].samples[0].fate = SampleFate::kLost;
+  WriteEpisodes(episodes, path);
+  std::string bytes = testing::ReadFile(path);
+  // magic, count, label size (empty label), window_s, K = 0, N, then the
+  // sample: modality, node, t_s, on_time, fate.
+  const std::size_t at = 8 + 8 + 8 + 8 + 8 + 8 + 1 + 4 + 8 + 1;
+  REQUIRE(static_cast<std::uint8_t>(bytes[at]) == 2);
+  bytes[at] = 4;
+  const std::string bad = dir + "/bad-fate.bin";
+  testing::WriteFile(bad, bytes);
+  const std::string what = RuntimeErrorOf([&] { ReadEpisodes(bad); });
+  CHECK_THAT(what, Catch::Contains(bad));
+  CHECK_THAT(what, Catch::Contains("fate 4"));
 }
 
 TEST_CASE("DatasetIo: crops are stored as the nearest 8-bit grey", "[pipeline]") {
