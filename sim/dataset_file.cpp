@@ -298,6 +298,7 @@ void WriteEpisode(const Writer& w, hid_t parent, std::size_t index, const Episod
   w.Attribute(g.get(), "label", e.label);
   w.Attribute(g.get(), "weather", pipeline::WeatherOf(e));
   w.Attribute(g.get(), "window_s", e.window_s);
+  w.Attribute(g.get(), "raw_modalities", e.raw_modalities);
   w.Vectors(g.get(), "window_truth_m", e.window_truth);
 
   // The frames table, and each modality's rows of it.

@@ -157,12 +157,19 @@ Scenario EpisodeScenario(const Scenario& base, const EpisodePlan& plan, int i, s
                           base.base_dir);
 }
 
+std::uint8_t RawModalities(const Scenario& s) {
+  const pipeline::PreprocessConfig& p = s.pipeline.preprocess;
+  return static_cast<std::uint8_t>((p.CameraRaw() ? 1 : 0) | (p.LidarRaw() ? 2 : 0) |
+                                   (p.RadarRaw() ? 4 : 0));
+}
+
 pipeline::Episode SimulateEpisode(const Scenario& s) {
   pipeline::Episode episode;
   RunOptions o;
   o.quiet = true;
   o.collect = &episode;
   RunScenario(s, o);
+  episode.raw_modalities = RawModalities(s);
   return episode;
 }
 
@@ -265,6 +272,27 @@ SavedEpisodes ReadSavedEpisodes(const Scenario& base, const EpisodePlan& plan, i
   SavedEpisodes saved;
   saved.episodes = pipeline::ReadEpisodes(file);
   std::vector<pipeline::Episode>& held = saved.episodes;
+  // What the nodes sent must be what this scenario's nodes send (a file of
+  // pre-processed observations cannot train the raw variant, nor the
+  // reverse). A file from before the record holds pre-processed data.
+  const auto what = [](std::uint8_t bits) {
+    if (bits == 0) return std::string("pre-processed data");
+    std::string m;
+    for (int i = 0; i < pipeline::kModalityCount; ++i)
+      if (bits & (1 << i))
+        m += (m.empty() ? "" : ", ") +
+             std::string(core::ModalityName(static_cast<core::Modality>(i)));
+    return "raw data of " + m;
+  };
+  const std::uint8_t want_raw = RawModalities(base);
+  for (std::size_t i = 0; i < held.size(); ++i) {
+    const std::uint8_t raw =
+        held[i].raw_modalities == pipeline::Episode::kRawUnknown ? 0 : held[i].raw_modalities;
+    if (raw != want_raw)
+      throw core::UsageError(command + ": " + file + ": episode " + std::to_string(i) + " holds " +
+                             what(raw) + ", this scenario's nodes send " + what(want_raw) +
+                             " (/pipeline/preprocess/raw): use another --data file");
+  }
   saved.missing = plan;
   EpisodePlan& missing = saved.missing;
   // The length FILE's episodes were simulated for: whole windows of it.

@@ -39,6 +39,10 @@ struct EpisodePlan {
 Scenario EpisodeScenario(const Scenario& base, const EpisodePlan& plan, int i,
                          std::string* label = nullptr);
 
+// The modalities whose nodes send raw data in `s` (bit m: Modality m): what
+// Episode::raw_modalities records.
+std::uint8_t RawModalities(const Scenario& s);
+
 // Simulates one episode and collects its samples (no files written).
 pipeline::Episode SimulateEpisode(const Scenario& s);
 

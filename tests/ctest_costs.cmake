@@ -13,7 +13,8 @@ foreach(entry
     "Kill: training killed at random moments leaves no half-written model or data=90"
     "CLI: train --variant trains a variant on shared encoders that runs in the loop under its name and on modality subsets=60"
     "CLI: dataset writes every field of the training episodes to HDF5, the same bytes whatever --jobs or mpirun, with the node encoders' latents given a model=60"
-    "Kill: a dataset export killed at random moments leaves no half-written file=40")
+    "Kill: a dataset export killed at random moments leaves no half-written file=40"
+    "CLI: the Python example trains on uavsim dataset's HDF5 and its model runs in the loop, in metrics, estimates, beams and a sweep=40")
   string(FIND "${entry}" "=" at REVERSE)
   string(SUBSTRING "${entry}" 0 ${at} name)
   math(EXPR from "${at} + 1")

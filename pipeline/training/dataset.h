@@ -94,6 +94,11 @@ class SampleList {
 struct Episode {
   std::string label;  // what varied, for reports: "orbit seed 7 rain 4 mm/h loss 0.12"
   double window_s = 0.2;
+  // The modalities whose nodes sent their data without pre-processing
+  // (/pipeline/preprocess raw; bit m: Modality m), kRawUnknown for an
+  // episode file that predates the record (version 01).
+  static constexpr std::uint8_t kRawUnknown = 0xFF;
+  std::uint8_t raw_modalities = 0;
   SampleList samples;                         // in capture order
   std::vector<Eigen::Vector3d> window_truth;  // [k - 1]: target position at k t^w
   // The windows whose truth the part of a Dataset holding this copy may use:

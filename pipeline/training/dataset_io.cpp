@@ -136,6 +136,7 @@ void WriteEpisodes(const std::vector<Episode>& episodes, const std::string& path
     for (const Episode& e : episodes) {
       w.String(e.label);
       w.Pod(e.window_s);
+      w.Pod<std::uint8_t>(e.raw_modalities);
       w.Pod<std::uint64_t>(e.window_truth.size());
       for (const auto& p : e.window_truth) w.Vec3(p);
       w.Pod<std::uint64_t>(e.samples.size());
@@ -232,6 +233,9 @@ std::vector<Episode> ReadEpisodes(const std::string& path) {
   for (Episode& e : episodes) {
     e.label = r.String();
     e.window_s = r.Pod<double>();
+    e.raw_modalities = v01 ? Episode::kRawUnknown : r.Pod<std::uint8_t>();
+    if (e.raw_modalities > 7 && e.raw_modalities != Episode::kRawUnknown)
+      r.Fail("corrupt (raw modalities " + std::to_string(e.raw_modalities) + ")");
     e.window_truth.resize(r.Count(24));
     for (auto& p : e.window_truth) p = r.Vec3();
     e.samples.resize(r.Count(v01 ? 50 : 59));

@@ -3,12 +3,14 @@
 // as the 8-bit grey values they were made from (lossless).
 //
 // Versions (the 8-byte magic): "UAVEPS02" (written) stores each sample's
-// fate and arrival time; "UAVEPS01" (read) has neither: its samples read
+// fate and arrival time and each episode's raw modalities; "UAVEPS01"
+// (read) has none of them: its samples read
 // with fate kOnTime when on time, else kUnknown, and a NaN arrival time.
 //
 // Layout of version 02 (v01: the same without the two fields marked *):
 //   magic[8], u64 episodes, then per episode:
-//     string label (u64 size + bytes), f64 window_s,
+//     string label (u64 size + bytes), f64 window_s, *u8 raw modalities
+//     (Episode::raw_modalities; v01: kRawUnknown),
 //     u64 K, K x vec3 window truth (vec3 = 3 x f64),
 //     u64 N, N samples:
 //       u8 modality, u32 node, f64 t_s, u8 on_time, *u8 fate, *f64 t_arrival_s,

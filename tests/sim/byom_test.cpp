@@ -14,6 +14,7 @@
 #include <tuple>
 #include <vector>
 
+#include "pipeline/training/dataset_io.h"
 #include "sim/core/json_io.h"
 #include "test_support.h"
 
@@ -166,4 +167,79 @@ class M(torch.nn.Module):
     CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
   }
   CHECK_FALSE(fs::exists(out));
+}
+
+TEST_CASE(
+    "CLI: the Python example trains on uavsim dataset's HDF5 and its model runs in the "
+    "loop, in metrics, estimates, beams and a sweep",
+    "[sim][byom][slow]") {
+  const std::string dir = TempDir("byom-example");
+  const std::string h5 = dir + "/data.h5", episodes = dir + "/episodes.bin";
+  // 1. The training simulation to HDF5, with the shipped model's latents
+  // (the episode file kept for the C++ side of the comparison).
+  const auto d = RunCli({"dataset", kDefault, "--episodes", "3", "--episode-s", "3", "--model",
+                         std::string(UAVSIM_SOURCE_DIR) + "/models/default", "--data", episodes,
+                         "--out", h5, "--quiet"});
+  INFO(d.err);
+  REQUIRE(d.exit_code == 0);
+  // 2. The example, at toy size.
+  const auto p =
+      RunProgram({kPython, std::string(UAVSIM_SOURCE_DIR) + "/examples/python/train_gru.py", h5,
+                  "--out", dir + "/mine.pt", "--seconds", "2", "--history", "4"});
+  INFO(p.err);
+  REQUIRE(p.exit_code == 0);
+  const Json py = uavsim::core::ParseJsonText(p.out, "train_gru.py's output");
+
+  // The Python side read what the C++ side simulated: the same episodes,
+  // windows, frames per modality (all and on time) and latent size.
+  const std::vector<uavsim::pipeline::Episode> eps = uavsim::pipeline::ReadEpisodes(episodes);
+  REQUIRE(eps.size() == 3);
+  std::size_t windows = 0;
+  int frames[3] = {0, 0, 0}, on_time[3] = {0, 0, 0};
+  for (const auto& e : eps) {
+    windows += e.window_truth.size();
+    for (const auto& s : e.samples) {
+      ++frames[static_cast<int>(s.modality)];
+      on_time[static_cast<int>(s.modality)] += s.on_time ? 1 : 0;
+    }
+  }
+  CHECK(py["episodes"] == 3);
+  CHECK(py["windows"] == windows);
+  CHECK(py["latent_dim"] == 16);
+  CHECK(py["history_windows"] == 4);
+  const char* names[3] = {"camera", "lidar", "radar"};
+  for (int m = 0; m < 3; ++m) {
+    INFO(names[m]);
+    CHECK(py["frames"][names[m]] == frames[m]);
+    CHECK(py["on_time"][names[m]] == on_time[m]);
+    CHECK(frames[m] > 0);
+  }
+  CHECK(py["held_out_windows"].get<int>() > 0);
+  CHECK(std::isfinite(py["held_out_rmse_m"].get<double>()));
+
+  // 3. The model in the loop, named relative to the working directory.
+  const std::string methods =
+      R"(/pipeline/methods=["ekf",{"type":"torchscript","name":"mine","edge":"mine.pt"}])";
+  const auto r = RunCli(
+      {"run", kDefault, "--duration", "3", "--out", dir + "/run", "--quiet", "--set", methods},
+      dir);
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  const Json metrics = uavsim::core::LoadJsonFile(dir + "/run/metrics.json");
+  REQUIRE(metrics["rmse_m"].contains("mine"));
+  CHECK(metrics["rmse_m"]["mine"].is_number());
+  CHECK(ReadFile(dir + "/run/estimates.csv").find(",mine,") != std::string::npos);
+  CHECK(ReadFile(dir + "/run/rate_snr.csv").find(",mine,") != std::string::npos);
+  const std::string spec = dir + "/spec.json";
+  WriteFile(
+      spec,
+      R"({"name": "mine", "scenario": ")" + kDefault +
+          R"(", "set": {"/duration_s": 2, "/pipeline/methods": ["ekf", {"type": "torchscript", "name": "mine", "edge": ")" +
+          dir +
+          R"(/mine.pt"}]}, "parameters": [{"name": "loss", "pointer": "/links/default/loss/p", "values": [0, 0.2]}], "seeds": {"from": 1, "count": 1}})");
+  const auto s = RunCli({"sweep", spec, "--out", dir + "/sweep", "--quiet"});
+  INFO(s.err);
+  REQUIRE(s.exit_code == 0);
+  CHECK(Split(ReadFile(dir + "/sweep/summary.csv"), '\n')[0].find("rmse_mine") !=
+        std::string::npos);
 }

@@ -20,6 +20,7 @@
 
 #include "pipeline/model_bundle.h"
 #include "pipeline/torch_runtime.h"
+#include "pipeline/training/dataset_io.h"
 #include "pipeline/training/trainer.h"
 #include "pipeline/training/training_config.h"
 #include "results/csv.h"
@@ -708,6 +709,25 @@ TEST_CASE(
           "trains its own encoders");
   refused({"train", kDefault, "--variant", "gru", "--head", "both", "--out", dir + "/x"},
           "trains the paper's head only");
+  {
+    // An episode file of pre-processed data cannot train the raw variant
+    // (nor a raw one the others): the file records what the nodes sent.
+    uavsim::pipeline::Episode e;
+    e.label = "hand-made";
+    e.window_truth.resize(5, Eigen::Vector3d::Zero());
+    uavsim::pipeline::WriteEpisodes({e, e, e}, dir + "/pre.bin");
+    refused({"train", kDefault, "--variant", "raw", "--episodes", "3", "--data", dir + "/pre.bin",
+             "--out", dir + "/x"},
+            "pre.bin: episode 0 holds pre-processed data, this scenario's nodes send raw data of "
+            "camera, lidar, radar (/pipeline/preprocess/raw)");
+    e.raw_modalities = 7;
+    uavsim::pipeline::WriteEpisodes({e, e, e}, dir + "/raw.bin");
+    refused({"train", kDefault, "--variant", "gru", "--encoders", main, "--episodes", "3", "--data",
+             dir + "/raw.bin", "--out", dir + "/x"},
+            "raw.bin: episode 0 holds raw data of camera, lidar, radar, this scenario's nodes "
+            "send pre-processed data");
+    CHECK_FALSE(fs::exists(dir + "/x"));
+  }
   refused({"train", kDefault, "--variant", "gru", "--bottleneck", "mlp", "--out", dir + "/x"},
           "contradicts --variant gru");
   {

@@ -83,6 +83,7 @@ std::vector<Episode> SomeEpisodes() {
   Episode& a = episodes[0];
   a.label = "orbit seed 7 rain 4 mm/h loss 0.12";
   a.window_s = 0.2;
+  a.raw_modalities = 5;  // camera and radar sent raw data
   a.samples.push_back(CameraSample(0.0331, 0, true, 0, 128));
   a.samples.push_back(PointSample(Modality::kLidar, 0.05, 1, true, 6));
   a.samples.push_back(PointSample(Modality::kRadar, 0.0667, 2, false, 3));
@@ -175,6 +176,7 @@ TEST_CASE("DatasetIo: every field survives a round trip", "[pipeline]") {
     INFO("episode " << e);
     CHECK(read[e].label == written[e].label);
     CHECK(read[e].window_s == written[e].window_s);
+    CHECK(read[e].raw_modalities == written[e].raw_modalities);
     CHECK(read[e].window_truth == written[e].window_truth);
     REQUIRE(read[e].samples.size() == written[e].samples.size());
     for (std::size_t i = 0; i < read[e].samples.size(); ++i) {
@@ -253,6 +255,7 @@ TEST_CASE("DatasetIo: a version 01 file (no fates, no arrival times) still reads
   const Episode& e = read[0];
   CHECK(e.label == label);
   CHECK(e.window_s == 0.2);
+  CHECK(e.raw_modalities == Episode::kRawUnknown);  // v01 did not record it
   CHECK(e.window_truth ==
         std::vector<Eigen::Vector3d>{Eigen::Vector3d(1, 2, 3), Eigen::Vector3d(4, 5, 6)});
   REQUIRE(e.samples.size() == 2);
@@ -303,9 +306,9 @@ TEST_CASE("DatasetIo: a sample's fate outside the known values is refused", "[pi
   episodes[0].samples[0].fate = SampleFate::kLost;
   WriteEpisodes(episodes, path);
   std::string bytes = testing::ReadFile(path);
-  // magic, count, label size (empty label), window_s, K = 0, N, then the
-  // sample: modality, node, t_s, on_time, fate.
-  const std::size_t at = 8 + 8 + 8 + 8 + 8 + 8 + 1 + 4 + 8 + 1;
+  // magic, count, label size (empty label), window_s, raw modalities, K = 0,
+  // N, then the sample: modality, node, t_s, on_time, fate.
+  const std::size_t at = 8 + 8 + 8 + 8 + 1 + 8 + 8 + 1 + 4 + 8 + 1;
   REQUIRE(static_cast<std::uint8_t>(bytes[at]) == 2);
   bytes[at] = 4;
   const std::string bad = dir + "/bad-fate.bin";
@@ -313,6 +316,12 @@ TEST_CASE("DatasetIo: a sample's fate outside the known values is refused", "[pi
   const std::string what = RuntimeErrorOf([&] { ReadEpisodes(bad); });
   CHECK_THAT(what, Catch::Contains(bad));
   CHECK_THAT(what, Catch::Contains("fate 4"));
+  // The same for an episode's raw modalities (bits 0-2, or 255 unknown).
+  std::string raw = testing::ReadFile(path);
+  REQUIRE(raw[8 + 8 + 8 + 8] == 0);
+  raw[8 + 8 + 8 + 8] = 9;
+  testing::WriteFile(bad, raw);
+  CHECK_THAT(RuntimeErrorOf([&] { ReadEpisodes(bad); }), Catch::Contains("raw modalities 9"));
 }
 
 TEST_CASE("DatasetIo: crops are stored as the nearest 8-bit grey", "[pipeline]") {
