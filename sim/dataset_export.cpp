@@ -2,12 +2,8 @@
 
 #include <unistd.h>
 
-#include <boost/mpi/collectives.hpp>
-#include <boost/mpi/communicator.hpp>
-#include <boost/mpi/environment.hpp>
 #include <filesystem>
 #include <iostream>
-#include <iterator>
 #include <memory>
 #include <vector>
 
@@ -142,56 +138,23 @@ std::optional<DatasetSummary> RunDatasetExport(const Scenario& base, const Datas
 
   // As `uavsim train`: under mpirun every rank simulates episodes; rank 0
   // alone checks, reads --data, and writes.
-  std::unique_ptr<boost::mpi::environment> env;
-  std::unique_ptr<boost::mpi::communicator> world;
-  if (UnderMpirun()) {
-    env = std::make_unique<boost::mpi::environment>();
-    world = std::make_unique<boost::mpi::communicator>();
-  }
-  EpisodeJobs jobs{c.jobs, c.quiet, "", world.get(), kCommand};
-  const auto share_plan = [&world](EpisodePlan& p) {
-    if (!world) return;
-    boost::mpi::broadcast(*world, p.first_episode, 0);
-    boost::mpi::broadcast(*world, p.episodes, 0);
-    boost::mpi::broadcast(*world, p.episode_s, 0);
-  };
-  if (world && world->rank() != 0) {
-    share_plan(plan);
-    if (plan.episodes > 0) SimulateEpisodes(base, plan, jobs);
-    return std::nullopt;
-  }
-
   std::string manifest;
-  std::vector<pipeline::Episode> episodes;
-  EpisodePlan todo = plan;  // all of them, unless --data holds some
-  try {
-    if (!c.model.empty()) manifest = CheckEncoderModel(base, c.scenario_file, c.model, kCommand);
-    std::error_code ec;
-    if (!c.data_file.empty() && fs::is_regular_file(c.data_file, ec)) {
-      SavedEpisodes saved =
-          ReadSavedEpisodes(base, plan, c.episodes, c.episode_s <= 0, c.data_file, kCommand);
-      episodes = std::move(saved.episodes);
-      todo = saved.missing;
-    }
-    CheckOut(c);
-    RemoveStaleTemporaries(c.out_file);
-  } catch (const std::exception& e) {
-    if (!world) throw;
-    std::cerr << e.what() << "\n";
-    world->abort(2);
-  }
-  share_plan(todo);
-  if (todo.episodes > 0) {
-    const fs::path out(c.out_file);
-    const RemoveOnExit scratch{(FolderOf(c.out_file) / ("." + out.filename().string() +
-                                                        ".partial-" + std::to_string(::getpid())))
-                                   .string()};
-    jobs.scratch_dir = scratch.dir;
-    std::vector<pipeline::Episode> more = SimulateEpisodes(base, todo, jobs);
-    episodes.insert(episodes.end(), std::make_move_iterator(more.begin()),
-                    std::make_move_iterator(more.end()));
-    if (!c.data_file.empty()) pipeline::WriteEpisodes(episodes, c.data_file);
-  }
+  const fs::path out(c.out_file);
+  const RemoveOnExit scratch{(FolderOf(c.out_file) / ("." + out.filename().string() + ".partial-" +
+                                                      std::to_string(::getpid())))
+                                 .string()};
+  EpisodeRequest request{c.episodes, c.episode_s <= 0, c.data_file, c.jobs, c.quiet, kCommand};
+  std::optional<std::vector<pipeline::Episode>> gathered = GatherEpisodes(
+      base, plan, request,
+      [&] {
+        if (!c.model.empty())
+          manifest = CheckEncoderModel(base, c.scenario_file, c.model, kCommand);
+        CheckOut(c);
+        RemoveStaleTemporaries(c.out_file);
+      },
+      [&] { return scratch.dir; });
+  if (!gathered) return std::nullopt;  // an MPI rank other than 0: its share is simulated
+  std::vector<pipeline::Episode>& episodes = *gathered;
 
   std::vector<std::vector<std::vector<float>>> latents;
   if (!manifest.empty()) latents = EncodeAll(base, episodes, manifest, c);
@@ -202,7 +165,7 @@ std::optional<DatasetSummary> RunDatasetExport(const Scenario& base, const Datas
   header.scenario_file = c.scenario_file;
   header.scenario = ResolvedJson(base).dump();
   header.seed = c.seed;
-  header.episode_s = todo.episode_s;
+  header.episode_s = plan.episode_s;
   header.window_s = base.pipeline.window_s;
   header.latent_dim = manifest.empty() ? 0 : base.pipeline.latent_dim;
   header.model = manifest;
@@ -220,7 +183,7 @@ std::optional<DatasetSummary> RunDatasetExport(const Scenario& base, const Datas
 
   DatasetSummary summary;
   summary.episodes = episodes.size();
-  summary.episode_s = todo.episode_s;
+  summary.episode_s = plan.episode_s;
   summary.latent_dim = header.latent_dim;
   for (const pipeline::Episode& e : episodes)
     for (const pipeline::Sample& s : e.samples) {

@@ -444,6 +444,58 @@ void CheckEncoderSource(const Scenario& base, const TrainCommand& c) {
 
 }  // namespace
 
+std::optional<std::vector<pipeline::Episode>> GatherEpisodes(
+    const Scenario& base, EpisodePlan& plan, const EpisodeRequest& request,
+    const std::function<void()>& prepare, const std::function<std::string()>& scratch) {
+  std::unique_ptr<boost::mpi::environment> env;
+  std::unique_ptr<boost::mpi::communicator> world;
+  if (UnderMpirun()) {
+    env = std::make_unique<boost::mpi::environment>();
+    world = std::make_unique<boost::mpi::communicator>();
+  }
+  EpisodeJobs jobs{request.jobs, request.quiet, "", world.get(), request.command};
+  // What is left to simulate, rank 0 tells the others: [first, first + count)
+  // episodes of `length` s.
+  const auto share_plan = [&world](EpisodePlan& p) {
+    if (!world) return;
+    boost::mpi::broadcast(*world, p.first_episode, 0);
+    boost::mpi::broadcast(*world, p.episodes, 0);
+    boost::mpi::broadcast(*world, p.episode_s, 0);
+  };
+  if (world && world->rank() != 0) {
+    share_plan(plan);
+    if (plan.episodes > 0) SimulateEpisodes(base, plan, jobs);
+    return std::nullopt;
+  }
+  std::vector<pipeline::Episode> episodes;
+  EpisodePlan todo = plan;  // all of them, unless --data holds some
+  try {
+    prepare();
+    std::error_code ec;
+    if (!request.data_file.empty() && fs::is_regular_file(request.data_file, ec)) {
+      SavedEpisodes saved = ReadSavedEpisodes(base, plan, request.episodes, request.keep_length,
+                                              request.data_file, request.command);
+      episodes = std::move(saved.episodes);
+      todo = saved.missing;
+    }
+  } catch (const std::exception& e) {
+    if (!world) throw;
+    std::cerr << e.what() << "\n";
+    world->abort(2);
+  }
+  share_plan(todo);
+  if (todo.episodes > 0) {
+    jobs.scratch_dir = scratch();
+    std::vector<pipeline::Episode> more = SimulateEpisodes(base, todo, jobs);
+    episodes.insert(episodes.end(), std::make_move_iterator(more.begin()),
+                    std::make_move_iterator(more.end()));
+    if (!request.data_file.empty()) pipeline::WriteEpisodes(episodes, request.data_file);
+  }
+  plan.episodes = static_cast<int>(episodes.size());
+  plan.episode_s = todo.episode_s;
+  return episodes;
+}
+
 std::optional<pipeline::TrainReport> RunTraining(const Scenario& base, const TrainCommand& c) {
   EpisodePlan plan = Defaults(c.quick).plan;
   plan.seed = c.seed;
@@ -466,61 +518,20 @@ std::optional<pipeline::TrainReport> RunTraining(const Scenario& base, const Tra
   if (c.episodes > 0) plan.episodes = c.episodes;
   if (c.episode_s > 0) plan.episode_s = c.episode_s;
 
-  // Under mpirun every rank simulates episodes; rank 0 alone writes and
-  // trains, and says whether there is anything to simulate (--data may
-  // hold the episodes already).
-  std::unique_ptr<boost::mpi::environment> env;
-  std::unique_ptr<boost::mpi::communicator> world;
-  if (UnderMpirun()) {
-    env = std::make_unique<boost::mpi::environment>();
-    world = std::make_unique<boost::mpi::communicator>();
-  }
-  EpisodeJobs jobs{c.jobs, c.quiet, "", world.get(), "uavsim train"};
-  // What is left to simulate, rank 0 tells the others: [first, first + count)
-  // episodes of `length` s.
-  const auto share_plan = [&world](EpisodePlan& p) {
-    if (!world) return;
-    boost::mpi::broadcast(*world, p.first_episode, 0);
-    boost::mpi::broadcast(*world, p.episodes, 0);
-    boost::mpi::broadcast(*world, p.episode_s, 0);
-  };
-  if (world && world->rank() != 0) {
-    share_plan(plan);
-    if (plan.episodes > 0) SimulateEpisodes(base, plan, jobs);
-    return std::nullopt;
-  }
-
-  pipeline::InitTorch(c.threads, c.seed);
-  std::optional<results::RunDirectory> dir;
-  std::vector<pipeline::Episode> episodes;
-  EpisodePlan todo = plan;  // all of them, unless --data holds some
-  try {
-    dir.emplace(c.out_dir, c.force);  // the model folder, all-or-nothing
-    std::error_code ec;
-    if (!c.data_file.empty() && fs::is_regular_file(c.data_file, ec)) {
-      SavedEpisodes saved =
-          ReadSavedEpisodes(base, plan, c.episodes, c.episode_s <= 0, c.data_file);
-      episodes = std::move(saved.episodes);
-      todo = saved.missing;
-    }
-  } catch (const std::exception& e) {
-    if (!world) throw;
-    std::cerr << e.what() << "\n";
-    world->abort(2);
-  }
-  share_plan(todo);
-  if (todo.episodes > 0) {
-    jobs.scratch_dir = dir->StagingPath("episodes.partial");
-    std::vector<pipeline::Episode> more = SimulateEpisodes(base, todo, jobs);
-    episodes.insert(episodes.end(), std::make_move_iterator(more.begin()),
-                    std::make_move_iterator(more.end()));
-    if (!c.data_file.empty()) pipeline::WriteEpisodes(episodes, c.data_file);
-  }
-  plan.episodes = static_cast<int>(episodes.size());
-  plan.episode_s = todo.episode_s;
+  // Rank 0 alone (under mpirun) trains and writes the model folder.
+  std::optional<results::RunDirectory> dir;  // the model folder, all-or-nothing
+  EpisodeRequest request{c.episodes, c.episode_s <= 0, c.data_file, c.jobs, c.quiet};
+  std::optional<std::vector<pipeline::Episode>> episodes = GatherEpisodes(
+      base, plan, request,
+      [&] {
+        pipeline::InitTorch(c.threads, c.seed);
+        dir.emplace(c.out_dir, c.force);
+      },
+      [&] { return dir->StagingPath("episodes.partial"); });
+  if (!episodes) return std::nullopt;  // an MPI rank other than 0: its share is simulated
   pipeline::Dataset data = c.split == pipeline::DataSplit::kFrame
-                               ? SplitByFrame(std::move(episodes), c.seed)
-                               : SplitByTrajectory(std::move(episodes), c.seed);
+                               ? SplitByFrame(std::move(*episodes), c.seed)
+                               : SplitByTrajectory(std::move(*episodes), c.seed);
   if (c.train_episodes > 0 && static_cast<std::size_t>(c.train_episodes) < data.train.size())
     data.train.resize(static_cast<std::size_t>(c.train_episodes));
   std::string split = std::to_string(data.train.size()) + "/" +

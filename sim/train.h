@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -82,6 +83,27 @@ struct SavedEpisodes {
 SavedEpisodes ReadSavedEpisodes(const Scenario& base, const EpisodePlan& plan, int count,
                                 bool keep_length, const std::string& file,
                                 const std::string& command = "uavsim train");
+
+// How a command that simulates episodes (`train`, `dataset`) gets them.
+struct EpisodeRequest {
+  int episodes = 0;          // asked for (0: the plan's); what --data is read to or extended to
+  bool keep_length = false;  // --episode-s not given: a --data file's length holds
+  std::string data_file;     // --data (empty: none)
+  int jobs = 1;
+  bool quiet = false;
+  std::string command = "uavsim train";  // for messages
+};
+// The plan's episodes for such a command. Under mpirun (an MPI environment
+// held for the call) every rank simulates its share; rank 0 first runs
+// `prepare` (the command's own checks and output staging: a throw there
+// ends every rank with exit 2 under mpirun, else propagates), reads what
+// --data holds, simulates the rest in the folder `scratch()` names and
+// extends the --data file. Rank 0 (or without MPI) returns the episodes, with
+// `plan.episodes` and `plan.episode_s` set to what they are; other ranks
+// return nothing.
+std::optional<std::vector<pipeline::Episode>> GatherEpisodes(
+    const Scenario& base, EpisodePlan& plan, const EpisodeRequest& request,
+    const std::function<void()>& prepare, const std::function<std::string()>& scratch);
 
 // Splits by trajectory: 15 % test and 15 % validation (at least one each when
 // there are three or more episodes), the rest training; which episode goes

@@ -66,6 +66,26 @@ class M(torch.nn.Module):
         return mask[-1].sum(-1).to(torch.float64)
 )";
 
+// Sweeps the default scenario (2 s, loss 0 and 0.3, one seed) with ekf and
+// the TorchScript model `model` as method `name`; returns summary.csv.
+std::string SweepWith(const std::string& dir, const std::string& name, const std::string& model) {
+  const std::string spec = dir + "/spec.json";
+  const Json methods =
+      Json::array({"ekf", Json{{"type", "torchscript"}, {"name", name}, {"edge", model}}});
+  const Json j = {{"name", "byom"},
+                  {"scenario", kDefault},
+                  {"set", {{"/duration_s", 2}, {"/pipeline/methods", methods}}},
+                  {"parameters", Json::array({Json{{"name", "loss"},
+                                                   {"pointer", "/links/default/loss/p"},
+                                                   {"values", Json::array({0, 0.3})}}})},
+                  {"seeds", {{"from", 1}, {"count", 1}}}};
+  WriteFile(spec, j.dump());
+  const auto s = RunCli({"sweep", spec, "--out", dir + "/sweep", "--quiet"});
+  INFO(s.err);
+  REQUIRE(s.exit_code == 0);
+  return ReadFile(dir + "/sweep/summary.csv");
+}
+
 }  // namespace
 
 TEST_CASE(
@@ -126,17 +146,7 @@ TEST_CASE(
   CHECK(ReadFile(out + "/rate_snr.csv").find(",counts,") != std::string::npos);
 
   // A sweep: a column of its own.
-  const std::string spec = dir + "/spec.json";
-  WriteFile(
-      spec,
-      R"({"name": "byom", "scenario": ")" + kDefault +
-          R"(", "set": {"/duration_s": 2, "/pipeline/methods": ["ekf", {"type": "torchscript", "name": "counts", "edge": ")" +
-          model +
-          R"("}]}, "parameters": [{"name": "loss", "pointer": "/links/default/loss/p", "values": [0, 0.3]}], "seeds": {"from": 1, "count": 1}})");
-  const auto s = RunCli({"sweep", spec, "--out", dir + "/sweep", "--quiet"});
-  INFO(s.err);
-  REQUIRE(s.exit_code == 0);
-  const auto summary = Split(ReadFile(dir + "/sweep/summary.csv"), '\n');
+  const auto summary = Split(SweepWith(dir, "counts", model), '\n');
   REQUIRE(summary.size() == 3);
   CHECK(summary[0].find("rmse_counts") != std::string::npos);
 }
@@ -230,16 +240,6 @@ TEST_CASE(
   CHECK(metrics["rmse_m"]["mine"].is_number());
   CHECK(ReadFile(dir + "/run/estimates.csv").find(",mine,") != std::string::npos);
   CHECK(ReadFile(dir + "/run/rate_snr.csv").find(",mine,") != std::string::npos);
-  const std::string spec = dir + "/spec.json";
-  WriteFile(
-      spec,
-      R"({"name": "mine", "scenario": ")" + kDefault +
-          R"(", "set": {"/duration_s": 2, "/pipeline/methods": ["ekf", {"type": "torchscript", "name": "mine", "edge": ")" +
-          dir +
-          R"(/mine.pt"}]}, "parameters": [{"name": "loss", "pointer": "/links/default/loss/p", "values": [0, 0.2]}], "seeds": {"from": 1, "count": 1}})");
-  const auto s = RunCli({"sweep", spec, "--out", dir + "/sweep", "--quiet"});
-  INFO(s.err);
-  REQUIRE(s.exit_code == 0);
-  CHECK(Split(ReadFile(dir + "/sweep/summary.csv"), '\n')[0].find("rmse_mine") !=
+  CHECK(Split(SweepWith(dir, "mine", dir + "/mine.pt"), '\n')[0].find("rmse_mine") !=
         std::string::npos);
 }
