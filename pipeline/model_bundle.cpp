@@ -41,15 +41,14 @@ void Visit(V& v, ModelManifest& c) {
     v.Check(IsPlainFileName(*name), key,
             "expected a file name in the model's folder, got \"" + *name + "\"");
   }
-  // The edge heads: either may be empty, not both.
+  // The edge heads: either may be empty; both empty is a model of stage-1
+  // encoders only (`uavsim train --head none`), which no method can run.
   for (auto [key, name] :
        {std::pair{"edge", &c.edge}, std::pair{"anchored_edge", &c.anchored_edge}}) {
     v(key, *name);
     v.Check(name->empty() || IsPlainFileName(*name), key,
             "expected a file name in the model's folder or \"\", got \"" + *name + "\"");
   }
-  v.Check(!c.edge.empty() || !c.anchored_edge.empty(), "edge",
-          "the model names no edge network (edge and anchored_edge are both empty)");
   v("variant", c.variant);
   v.Check(FindVariant(c.variant) != nullptr, "variant",
           "expected one of " + VariantNames() + ", got \"" + c.variant + "\"");

@@ -37,7 +37,7 @@ struct ModelManifest {
   std::string lidar = "lidar.json";
   std::string radar = "radar.json";
   // The edge networks' weights (sidecars: + ".json"), either may be empty
-  // (not trained), not both: the paper's head (`uavloc`) and the anchored
+  // (not trained; both: a model of stage-1 encoders only): the paper's head (`uavloc`) and the anchored
   // head (`uavloc_anchored`). Each file's sidecar says which head it holds
   // (models written before the anchored head got its own key hold it in
   // `edge`; Load serves it as `uavloc_anchored`).

@@ -31,12 +31,7 @@ constexpr double kPaperRadarPre = 40.33;
 constexpr double kPaperImage = 147.32;
 constexpr double kPaperPointCloud = 1426.98;
 
-struct Row {
-  std::string module;
-  double ours_mflops = 0.0;
-  std::optional<double> paper_mflops;
-  std::string note;
-};
+using Row = FlopsRow;
 
 void PrintTable(std::ostream& out, const std::vector<Row>& rows) {
   out << std::left << std::setw(44) << "module" << std::right << std::setw(12) << "ours MFLOPs"
@@ -80,7 +75,7 @@ pipeline::IbCcConfig EncoderConfig(Modality m) {
 
 }  // namespace
 
-int BenchFlops(bool quiet, std::ostream& out) {
+int BenchFlops(bool quiet, std::ostream& out, std::vector<FlopsRow>* table) {
   pipeline::InitTorch(1, 1);
   const Scenario scenario;  // the default scenario's sensors and pre-processing
   const pipeline::PreprocessConfig& pre = scenario.pipeline.preprocess;
@@ -137,6 +132,7 @@ int BenchFlops(bool quiet, std::ostream& out) {
        parts(radar, "PointNet")},
   };
 
+  if (table) *table = rows;
   if (!quiet)
     out << "Table III: MFLOPs per frame, the paper's sizes (two 128 x 128 crops, 1024 points), "
            "z = "

@@ -3,7 +3,10 @@
 // the paper's values.
 #pragma once
 
+#include <optional>
 #include <ostream>
+#include <string>
+#include <vector>
 
 namespace uavsim::sim {
 
@@ -25,6 +28,13 @@ namespace uavsim::sim {
 // item x items) and each encoder's parts follow the table. No timing, no
 // training; builds the models once (about a second, mostly the paper
 // layout's two 16.8 M-weight layers). Returns 0.
-int BenchFlops(bool quiet, std::ostream& out);
+// `rows` (if not null) receives the table's rows.
+struct FlopsRow {
+  std::string module;
+  double ours_mflops = 0.0;
+  std::optional<double> paper_mflops;  // the paper's Table III value, if it has the row
+  std::string note;
+};
+int BenchFlops(bool quiet, std::ostream& out, std::vector<FlopsRow>* rows = nullptr);
 
 }  // namespace uavsim::sim

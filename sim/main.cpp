@@ -32,6 +32,7 @@
 #include "sim/scenario.h"
 #include "sim/sweep.h"
 #include "sim/sweep_spec.h"
+#include "sim/reproduce.h"
 #include "sim/train.h"
 #include "sim/version.h"
 
@@ -57,6 +58,7 @@ const char* kMainHelp =
     "  sweep SPEC.json            run a grid of scenarios (packet loss x weather x seeds)\n"
     "  train SCENARIO.json        train the UAVLoc model by simulation\n"
     "  dataset SCENARIO.json      export the training simulation's episodes to HDF5\n"
+    "  reproduce [--scenario S]   the paper's Sec. VI: every figure and table, with verdicts\n"
     "  report DIR                 redraw a run's or a sweep's report.html from its files\n"
     "  bench [raycast|radar|events|link|beam|pipeline|noise|flops|all]   measure the hot paths\n"
     "\n"
@@ -143,8 +145,9 @@ const char* kSweepHelp =
 const char* kTrainHelp =
     "usage: uavsim train SCENARIO.json [--out MODEL] [--config TRAIN.json]\n"
     "                    [--config-set /ptr=value]... [--quick] [--seed N] [--episodes N]\n"
-    "                    [--episode-s S] [--bottleneck ib|mlp] [--head H] [--threads N]\n"
-    "                    [--jobs N] [--data FILE] [--split trajectory|frame]\n"
+    "                    [--episode-s S] [--data-seed N] [--bottleneck ib|mlp] [--head H]\n"
+    "                    [--threads N]"
+" [--jobs N] [--data FILE] [--split trajectory|frame]\n"
     "                    [--train-episodes N] [--set /ptr=value]... [--force] [--quiet]\n"
     "       mpirun -np K uavsim train SCENARIO.json ... (every rank simulates episodes)\n"
     "\n"
@@ -184,12 +187,16 @@ const char* kTrainHelp =
     "  --episodes N   trajectories to simulate (default 40, at least 3)\n"
     "  --episode-s S  simulated seconds each (default 20)\n"
     "  --seed N       seeds the episodes, the split and the weights (default 1)\n"
+    "  --data-seed N  seeds the episodes instead (default: --seed): several training\n"
+    "                 seeds on one --data file\n"
     "  --bottleneck B ib (default: the paper's IB-CC head, mu/sigma and KL) or mlp (its\n"
     "                 MLP baseline of equal depth and parameter count, no KL): the same as\n"
     "                 --variant mlp_bottleneck\n"
     "  --head H       the edge heads to train on the same encoders: both (default), paper\n"
     "                 (the paper's linear head: method uavloc) or anchored (ours: the Mamba\n"
     "                 output picks among the nodes' geometric anchors; uavloc_anchored)\n"
+    "                 or none (stage 1 only: the encoders and their decoders' held-out\n"
+    "                 scores, a model no method can run)\n"
     "  --split S      trajectory (default: each episode in one of training, validation,\n"
     "                 test) or frame (the random frame split common in the literature:\n"
     "                 every episode's windows drawn 70/15/15 into the three parts, each\n"
@@ -208,8 +215,9 @@ const char* kTrainHelp =
     "  --variant V    a baseline or ablation of the paper's Sec. VI (list below): its\n"
     "                 training keys apply before --config; the model (default folder\n"
     "                 models/NAME-V) runs in the loop as method V (paper: uavloc)\n"
-    "  --encoders DIR reuse the stage-1 encoders of the model DIR (same scenario, a variant\n"
-    "                 that shares them): only stage 2 is trained\n"
+    "  --encoders DIR reuse the stage-1 encoders of the model DIR (same scenario and latent\n"
+    "                 size, a variant whose nodes send the same: paper's for gru, raw's for\n"
+    "                 raw_gru): only stage 2 is trained\n"
     "  --set P=V      override the scenario's value at JSON pointer P\n"
     "  --force        replace an existing MODEL folder\n"
     "\n"
@@ -262,6 +270,36 @@ std::string TrainVariantsHelp() {
   }
   return out;
 }
+
+const char* kReproduceHelp =
+    "usage: uavsim reproduce [--scenario S] [--quick] [--jobs N] [--out DIR] [--seeds K]\n"
+    "                        [--episodes N] [--set /ptr=value]... [--quiet]\n"
+    "       mpirun -np K uavsim reproduce ... (ranks share the episodes and the trainings)\n"
+    "\n"
+    "Re-runs the evaluation of the paper's Sec. VI on simulated data: simulates four\n"
+    "episode sets of the same flights (nodes pre-processing all, none, LiDAR and radar\n"
+    "only, the camera only), trains every variant the figures need (uavsim train\n"
+    "--variant) at every latent size and training seed, scores them on held-out\n"
+    "trajectories, and writes one CSV and one PNG per artefact (Figs. 7-15, Tables II-IV),\n"
+    "claims.csv, report.md and report.html: each result beside the paper's claim with a\n"
+    "verdict (holds / does not hold / mixed) from 95 % confidence intervals over seeds.\n"
+    "Cached and resumable: DIR/episodes/*.eps and DIR/models/<training>/ are kept; a killed\n"
+    "reproduction loses only the trainings under way and the same command resumes.\n"
+    "\n"
+    "  --scenario S   city (default: scenarios/default.json), twin (scenarios/mmaud_twin.json)\n"
+    "                 or a scenario file\n"
+    "  --quick        every artefact at toy size (6 episodes of 5 s, 2 epochs, 2 seeds, z 4,\n"
+    "                 16, 64): minutes, for a first look and CI; its numbers say nothing\n"
+    "                 about the paper\n"
+    "  --jobs N       trainings (and episodes) at a time, each in its own process with one\n"
+    "                 LibTorch thread (default 1; per rank under mpirun)\n"
+    "  --out DIR      default runs/reproduce-NAME (-quick with --quick)\n"
+    "  --seeds K      training seeds (default 3; quick 2)\n"
+    "  --episodes N   flights per episode set (default 60; quick 6)\n"
+    "  --set P=V      override the scenario's value at JSON pointer P\n"
+    "\n"
+    "exit codes: 0 reported, 1 some trainings failed (rerun to retry them), 2 bad input,\n"
+    "130 interrupted (finished trainings are kept)\n";
 
 const char* kBenchHelp =
     "usage: uavsim bench [raycast|radar|events|link|beam|pipeline|noise|flops|all] [--quiet]\n"
@@ -492,7 +530,7 @@ int Train(int argc, char** argv) {
   std::set<std::string> value_options{
       "--out",   "--seed",           "--episodes",   "--episode-s", "--threads", "--jobs",
       "--set",   "--data",           "--bottleneck", "--head",      "--config",  "--config-set",
-      "--split", "--train-episodes", "--variant",    "--encoders"};
+      "--split", "--train-episodes", "--variant",    "--encoders", "--data-seed"};
   const auto refuse_replaced = [](const std::string& flag) {
     const auto it = ReplacedTrainFlags().find(flag);
     if (it == ReplacedTrainFlags().end()) return;
@@ -519,6 +557,8 @@ int Train(int argc, char** argv) {
   c.force = a.Has("--force");
   c.data_file = a.Value("--data").value_or("");
   if (auto v = a.Value("--seed")) c.seed = UnsignedOption("train", "--seed", *v, ~0ull >> 1);
+  if (auto v = a.Value("--data-seed"))
+    c.data_seed = UnsignedOption("train", "--data-seed", *v, ~0ull >> 1);
   if (auto v = a.Value("--episodes"))
     c.episodes = static_cast<int>(UnsignedOption("train", "--episodes", *v, 100000));
   if (auto v = a.Value("--threads"))
@@ -538,7 +578,8 @@ int Train(int argc, char** argv) {
   c.variant = variant_name;
   c.mlp_bottleneck = variant->mlp_bottleneck;
   if (variant_name != "paper") c.anchored_head = false;  // ours extends the paper's design only
-  if (variant_name != "paper" && a.Value("--head") && *a.Value("--head") != "paper")
+  if (variant_name != "paper" && a.Value("--head") && *a.Value("--head") != "paper" &&
+      *a.Value("--head") != "none")
     throw UsageError("uavsim train: --variant " + variant_name +
                      " trains the paper's head only (--head paper); the anchored head "
                      "extends the paper variant");
@@ -546,21 +587,17 @@ int Train(int argc, char** argv) {
     throw UsageError("uavsim train: --bottleneck " + *a.Value("--bottleneck") +
                      " contradicts --variant " + variant_name +
                      " (--bottleneck mlp is --variant mlp_bottleneck)");
-  if (auto v = a.Value("--encoders")) {
-    if (!variant->shares_encoders())
-      throw UsageError("uavsim train: --variant " + variant_name +
-                       " changes what the nodes send: it trains its own encoders (no --encoders)");
-    c.encoders_dir = *v;
-  }
+  if (auto v = a.Value("--encoders")) c.encoders_dir = *v;  // checked against the variant
   if (auto v = a.Value("--bottleneck")) {
     if (*v != "ib" && *v != "mlp")
       throw UsageError("uavsim train: --bottleneck expects ib or mlp, got '" + *v + "'");
   }
   if (auto v = a.Value("--head")) {
-    if (*v != "anchored" && *v != "paper" && *v != "both")
-      throw UsageError("uavsim train: --head expects both, paper or anchored, got '" + *v + "'");
-    c.paper_head = *v != "anchored";
-    c.anchored_head = *v != "paper" && variant_name == "paper";
+    if (*v != "anchored" && *v != "paper" && *v != "both" && *v != "none")
+      throw UsageError("uavsim train: --head expects both, paper, anchored or none, got '" + *v +
+                       "'");
+    c.paper_head = *v == "paper" || *v == "both";
+    c.anchored_head = (*v == "anchored" || *v == "both") && variant_name == "paper";
   }
   if (auto v = a.Value("--split")) {
     if (*v != "trajectory" && *v != "frame")
@@ -582,7 +619,7 @@ int Train(int argc, char** argv) {
   c.command_line = "uavsim";
   for (int i = 1; i < argc; ++i) c.command_line += " " + std::string(argv[i]);
   uavsim::sim::Scenario s = uavsim::sim::LoadScenario(file, Overrides(a));
-  if (variant->raw) s.pipeline.preprocess.raw = true;  // the nodes' "without preprocessing"
+  uavsim::sim::ApplyVariantNodes(*variant, s);  // e.g. raw: "without preprocessing"
   c.out_dir = a.Value("--out").value_or("models/" + s.name +
                                         (variant_name == "paper" ? "" : "-" + variant_name));
   const std::optional<uavsim::pipeline::TrainReport> report = uavsim::sim::RunTraining(s, c);
@@ -726,6 +763,51 @@ int Sweep(int argc, char** argv) {
   return kExitOk;
 }
 
+int Reproduce(int argc, char** argv) {
+  const ParsedArgs a =
+      Parse("reproduce", argc, argv, 2,
+            {"--scenario", "--out", "--jobs", "--seeds", "--episodes", "--set"},
+            {"--quick", "--quiet", "--help"});
+  if (a.Has("--help")) return std::cout << kReproduceHelp, kExitOk;
+  if (!a.positional.empty())
+    throw UsageError("uavsim reproduce: unexpected argument '" + a.positional[0] +
+                     "' (the scenario goes after --scenario; see uavsim reproduce --help)");
+  uavsim::sim::ReproduceOptions o;
+  o.quick = a.Has("--quick");
+  o.quiet = a.Has("--quiet");
+  const std::string scenario = a.Value("--scenario").value_or("city");
+  o.scenario_file = scenario == "city"   ? "scenarios/default.json"
+                    : scenario == "twin" ? "scenarios/mmaud_twin.json"
+                                         : scenario;
+  if (auto v = a.Value("--jobs"))
+    o.jobs = static_cast<int>(UnsignedOption("reproduce", "--jobs", *v, 1024));
+  if (auto v = a.Value("--seeds"))
+    o.seeds = static_cast<int>(UnsignedOption("reproduce", "--seeds", *v, 100));
+  if (auto v = a.Value("--episodes"))
+    o.episodes = static_cast<int>(UnsignedOption("reproduce", "--episodes", *v, 100000));
+  if (o.jobs < 1 || (a.Value("--seeds") && o.seeds < 1) ||
+      (a.Value("--episodes") && o.episodes < 3))
+    throw UsageError(
+        "uavsim reproduce: --jobs and --seeds need at least 1, --episodes at least 3");
+  o.command_line = "uavsim";
+  for (int i = 1; i < argc; ++i) o.command_line += " " + std::string(argv[i]);
+  const uavsim::sim::Scenario s = uavsim::sim::LoadScenario(o.scenario_file, Overrides(a));
+  o.out_dir = a.Value("--out").value_or("runs/reproduce-" + s.name + (o.quick ? "-quick" : ""));
+  const uavsim::sim::ReproduceOutcome r = uavsim::sim::RunReproduce(s, o);
+  if (r.mpi_worker) return r.failed ? kExitFailure : kExitOk;
+  for (const std::string& w : r.warnings) std::cerr << "uavsim: warning: " << w << "\n";
+  if (r.failed) {
+    std::cerr << "uavsim reproduce: " << r.failed << " of " << r.arms
+              << " trainings failed or did not run (messages above); rerun the same command "
+                 "to retry them\n";
+    return kExitFailure;
+  }
+  if (!o.quiet)
+    std::printf("%zu trainings (%zu already done, %zu now) in %.0f s; report: %s/report.html\n",
+                r.arms, r.already_done, r.ran, r.wall_s, o.out_dir.c_str());
+  return kExitOk;
+}
+
 int Report(int argc, char** argv) {
   const ParsedArgs a = Parse("report", argc, argv, 2, {}, {"--quiet", "--help"});
   if (a.Has("--help")) return std::cout << kReportHelp, kExitOk;
@@ -805,6 +887,7 @@ int Main(int argc, char** argv) {
   if (cmd == "sweep") return Sweep(argc, argv);
   if (cmd == "train") return Train(argc, argv);
   if (cmd == "dataset") return Dataset(argc, argv);
+  if (cmd == "reproduce") return Reproduce(argc, argv);
   if (cmd == "report") return Report(argc, argv);
   throw UsageError("uavsim: unknown command '" + cmd + "' (see uavsim --help)");
 }

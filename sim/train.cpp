@@ -428,10 +428,12 @@ void CheckEncoderSource(const Scenario& base, const TrainCommand& c) {
     throw core::UsageError("uavsim train: --encoders " + c.encoders_dir + ": " + e.what());
   }
   const pipeline::Variant* v = pipeline::FindVariant(m.variant);
-  if (!v || !v->shares_encoders())
+  const pipeline::Variant* mine = pipeline::FindVariant(c.variant);
+  if (!v || !mine || !pipeline::SameNodes(*v, *mine))
     throw core::UsageError("uavsim train: --encoders " + c.encoders_dir + " is the " + m.variant +
-                           " variant, whose nodes send other latents: give a model of a variant "
-                           "that shares them (e.g. paper)");
+                           " variant, whose nodes send other latents than " + c.variant +
+                           "'s: give a model of a variant whose nodes send the same (" +
+                           (mine && mine->raw_modalities ? "e.g. raw" : "e.g. paper") + ")");
   if (m.scenario != base.name || m.layout_hash != LayoutHash(base))
     throw core::UsageError("uavsim train: --encoders " + c.encoders_dir +
                            " was trained for scenario \"" + m.scenario +
@@ -441,6 +443,11 @@ void CheckEncoderSource(const Scenario& base, const TrainCommand& c) {
                            std::to_string(m.latent_dim) + " values, the scenario asks for " +
                            std::to_string(base.pipeline.latent_dim));
 }
+
+// Splits, trains and commits `dir` (the model folder).
+pipeline::TrainReport TrainInto(const Scenario& base, const TrainCommand& c,
+                                std::vector<pipeline::Episode> episodes, const EpisodePlan& plan,
+                                results::RunDirectory& dir);
 
 }  // namespace
 
@@ -453,7 +460,14 @@ std::optional<std::vector<pipeline::Episode>> GatherEpisodes(
     env = std::make_unique<boost::mpi::environment>();
     world = std::make_unique<boost::mpi::communicator>();
   }
-  EpisodeJobs jobs{request.jobs, request.quiet, "", world.get(), request.command};
+  return GatherEpisodes(base, plan, request, prepare, scratch, world.get());
+}
+
+std::optional<std::vector<pipeline::Episode>> GatherEpisodes(
+    const Scenario& base, EpisodePlan& plan, const EpisodeRequest& request,
+    const std::function<void()>& prepare, const std::function<std::string()>& scratch,
+    boost::mpi::communicator* world) {
+  EpisodeJobs jobs{request.jobs, request.quiet, "", world, request.command};
   // What is left to simulate, rank 0 tells the others: [first, first + count)
   // episodes of `length` s.
   const auto share_plan = [&world](EpisodePlan& p) {
@@ -496,30 +510,22 @@ std::optional<std::vector<pipeline::Episode>> GatherEpisodes(
   return episodes;
 }
 
+void ApplyVariantNodes(const pipeline::Variant& v, Scenario& s) {
+  pipeline::PreprocessConfig& p = s.pipeline.preprocess;
+  if (v.raw_modalities & 1) p.camera.raw = true;
+  if (v.raw_modalities & 2) p.lidar.raw = true;
+  if (v.raw_modalities & 4) p.radar.raw = true;
+}
+
 std::optional<pipeline::TrainReport> RunTraining(const Scenario& base, const TrainCommand& c) {
   EpisodePlan plan = Defaults(c.quick).plan;
-  plan.seed = c.seed;
-  pipeline::TrainOptions t;
-  static_cast<pipeline::TrainingConfig&>(t) = c.training;
-  t.seed = c.seed;
-  t.quiet = c.quiet;
-  t.check_stop = core::ThrowIfInterrupted;
-  t.latent_dim = base.pipeline.latent_dim;
-  t.window_s = base.pipeline.window_s;
-  if (c.mlp_bottleneck) t.bottleneck = pipeline::IbBottleneck::kMlp;
-  t.score_classical = [&base](const std::vector<pipeline::Episode>& episodes) {
-    return ScoreClassicalMethods(base, episodes);
-  };
-  t.paper_head = c.paper_head;
-  t.anchored_head = c.anchored_head;
-  t.method = pipeline::VariantMethod(c.variant);
-  t.encoders_from = c.encoders_dir;
+  plan.seed = c.data_seed.value_or(c.seed);
   if (!c.encoders_dir.empty()) CheckEncoderSource(base, c);
   if (c.episodes > 0) plan.episodes = c.episodes;
   if (c.episode_s > 0) plan.episode_s = c.episode_s;
 
   // Rank 0 alone (under mpirun) trains and writes the model folder.
-  std::optional<results::RunDirectory> dir;  // the model folder, all-or-nothing
+  std::optional<results::RunDirectory> dir;  // staged here: the folder is checked before simulating
   EpisodeRequest request{c.episodes, c.episode_s <= 0, c.data_file, c.jobs, c.quiet};
   std::optional<std::vector<pipeline::Episode>> episodes = GatherEpisodes(
       base, plan, request,
@@ -529,9 +535,41 @@ std::optional<pipeline::TrainReport> RunTraining(const Scenario& base, const Tra
       },
       [&] { return dir->StagingPath("episodes.partial"); });
   if (!episodes) return std::nullopt;  // an MPI rank other than 0: its share is simulated
+  return TrainInto(base, c, std::move(*episodes), plan, *dir);
+}
+
+pipeline::TrainReport TrainOnEpisodes(const Scenario& base, const TrainCommand& c,
+                                      std::vector<pipeline::Episode> episodes,
+                                      const EpisodePlan& plan) {
+  if (!c.encoders_dir.empty()) CheckEncoderSource(base, c);
+  results::RunDirectory dir(c.out_dir, c.force);
+  return TrainInto(base, c, std::move(episodes), plan, dir);
+}
+
+namespace {
+
+pipeline::TrainReport TrainInto(const Scenario& base, const TrainCommand& c,
+                                std::vector<pipeline::Episode> episodes, const EpisodePlan& plan,
+                                results::RunDirectory& dir) {
+  pipeline::TrainOptions t;
+  static_cast<pipeline::TrainingConfig&>(t) = c.training;
+  t.seed = c.seed;
+  t.quiet = c.quiet;
+  t.check_stop = core::ThrowIfInterrupted;
+  t.latent_dim = base.pipeline.latent_dim;
+  t.window_s = base.pipeline.window_s;
+  if (c.mlp_bottleneck) t.bottleneck = pipeline::IbBottleneck::kMlp;
+  if (c.score_classical)
+    t.score_classical = [&base](const std::vector<pipeline::Episode>& episodes) {
+      return ScoreClassicalMethods(base, episodes);
+    };
+  t.paper_head = c.paper_head;
+  t.anchored_head = c.anchored_head;
+  t.method = pipeline::VariantMethod(c.variant);
+  t.encoders_from = c.encoders_dir;
   pipeline::Dataset data = c.split == pipeline::DataSplit::kFrame
-                               ? SplitByFrame(std::move(*episodes), c.seed)
-                               : SplitByTrajectory(std::move(*episodes), c.seed);
+                               ? SplitByFrame(std::move(episodes), c.seed)
+                               : SplitByTrajectory(std::move(episodes), c.seed);
   if (c.train_episodes > 0 && static_cast<std::size_t>(c.train_episodes) < data.train.size())
     data.train.resize(static_cast<std::size_t>(c.train_episodes));
   std::string split = std::to_string(data.train.size()) + "/" +
@@ -551,15 +589,19 @@ std::optional<pipeline::TrainReport> RunTraining(const Scenario& base, const Tra
   manifest.scenario = base.name;
   manifest.variant = c.variant;
   manifest.layout_hash = LayoutHash(base);
-  manifest.note = "trained by `" + c.command_line + "` (seed " + std::to_string(c.seed) + ", " +
-                  std::to_string(plan.episodes) + " episodes of " +
+  manifest.note = "trained by `" + c.command_line + "` (seed " + std::to_string(c.seed) +
+                  (plan.seed != c.seed ? ", episodes drawn by seed " + std::to_string(plan.seed)
+                                       : std::string()) +
+                  ", " + std::to_string(plan.episodes) + " episodes of " +
                   core::FormatNumber(plan.episode_s) + " s, split " + split +
                   (c.encoders_dir.empty() ? "" : "; stage-1 encoders from " + c.encoders_dir) + ")";
   pipeline::InitTorch(c.threads, c.seed);  // reseed: the weights do not depend on the simulation
   const pipeline::TrainReport report =
-      pipeline::TrainUavLoc(data, t, manifest, dir->StagingPath("."));
-  dir->Commit();
+      pipeline::TrainUavLoc(data, t, manifest, dir.StagingPath("."));
+  dir.Commit();
   return report;
 }
+
+}  // namespace
 
 }  // namespace uavsim::sim

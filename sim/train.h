@@ -104,6 +104,13 @@ struct EpisodeRequest {
 std::optional<std::vector<pipeline::Episode>> GatherEpisodes(
     const Scenario& base, EpisodePlan& plan, const EpisodeRequest& request,
     const std::function<void()>& prepare, const std::function<std::string()>& scratch);
+// The same inside an MPI environment the caller holds (`world`: its
+// communicator; null: no MPI), for commands that gather several episode
+// sets (`uavsim reproduce`).
+std::optional<std::vector<pipeline::Episode>> GatherEpisodes(
+    const Scenario& base, EpisodePlan& plan, const EpisodeRequest& request,
+    const std::function<void()>& prepare, const std::function<std::string()>& scratch,
+    boost::mpi::communicator* world);
 
 // Splits by trajectory: 15 % test and 15 % validation (at least one each when
 // there are three or more episodes), the rest training; which episode goes
@@ -142,7 +149,10 @@ struct TrainCommand {
   bool force = false;
   bool quick = false;  // Defaults(true).plan (and `training` resolved with quick)
   bool quiet = false;
-  std::uint64_t seed = 1;
+  std::uint64_t seed = 1;  // the split, the initial weights, dropout
+  // The seed that draws the episodes (EpisodePlan::seed); unset: `seed`.
+  // Several training seeds on one episode file (`uavsim reproduce`).
+  std::optional<std::uint64_t> data_seed;
   int episodes = 0;             // 0: the plan's default
   double episode_s = 0.0;       // 0: the plan's default
   bool mlp_bottleneck = false;  // the paper's MLP baseline instead of the IB head
@@ -151,9 +161,11 @@ struct TrainCommand {
   // `training`, its node-side choices in mlp_bottleneck and the scenario.
   std::string variant = "paper";
   // A model folder whose stage-1 encoders to reuse (stage 2 only); empty:
-  // train them. Must be a model of the same scenario whose variant shares
-  // encoders (not mlp_bottleneck or raw); core::UsageError naming it else.
+  // train them. Must be a model of the same scenario and latent size whose
+  // variant's nodes send what this variant's do (pipeline::SameNodes: e.g.
+  // paper for gru, raw for raw_gru); core::UsageError naming it else.
   std::string encoders_dir;
+  bool score_classical = true;  // the classical methods in the report (replays the test episodes)
   bool paper_head = true;     // train the paper's linear edge head (uavloc)
   bool anchored_head = true;  // train our anchored edge head (uavloc_anchored)
   pipeline::DataSplit split = pipeline::DataSplit::kTrajectory;
@@ -173,5 +185,18 @@ struct TrainCommand {
 // atomically. Returns the report; under mpirun, ranks other than 0 only
 // simulate episodes and return nothing.
 std::optional<pipeline::TrainReport> RunTraining(const Scenario& base, const TrainCommand& c);
+
+// The training part of RunTraining on episodes already at hand (drawn by
+// `plan`, which the model's note states): split, train, write the model
+// folder c.out_dir atomically. c.episodes, episode_s, jobs and data_file
+// are not used. Call pipeline::InitTorch first (it is called again with
+// c.seed before training).
+pipeline::TrainReport TrainOnEpisodes(const Scenario& base, const TrainCommand& c,
+                                      std::vector<pipeline::Episode> episodes,
+                                      const EpisodePlan& plan);
+
+// The variant's node-side choices applied to a scenario: its raw modalities'
+// nodes encode raw data (/pipeline/preprocess/<modality>/raw).
+void ApplyVariantNodes(const pipeline::Variant& v, Scenario& s);
 
 }  // namespace uavsim::sim

@@ -8,6 +8,7 @@
 #include <limits>
 #include <optional>
 #include <stdexcept>
+#include <sstream>
 
 #include "pipeline/edge/te_align.h"
 #include "pipeline/edge/uavloc_model.h"
@@ -574,6 +575,13 @@ Evaluation Evaluate(UavLocModel& model, const std::vector<WindowSequence>& seque
   model->eval();
   Evaluation ev;
   const double scale = model->config().position_scale_m;
+  const Eigen::Vector3d centre = model->config().position_centre_m;
+  // Head output (p - centre) / scale -> p, world ENU metres.
+  const auto world = [&](const torch::Tensor& row) {
+    const torch::Tensor r = row.to(torch::kDouble).contiguous();
+    const double* v = r.data_ptr<double>();
+    return Eigen::Vector3d(centre + scale * Eigen::Vector3d(v[0], v[1], v[2]));
+  };
   for (int bits = 1; bits <= kModalitySubsets; ++bits) {
     const std::string key = ModalitySubsetName(bits);
     double sum = 0.0, count = 0.0;
@@ -591,10 +599,13 @@ Evaluation Evaluate(UavLocModel& model, const std::vector<WindowSequence>& seque
       const auto c = counted.accessor<float, 1>();
       const auto e = errors.accessor<float, 1>();
       auto& windows = ev.squared_error_m2[key];
+      auto& positions = ev.position_m[key];
+      const std::size_t episode = static_cast<std::size_t>(&s - sequences.data());
       for (std::int64_t j = 0; j < c.size(0); ++j)
-        if (c[j] > 0.0f)
-          windows[{static_cast<std::size_t>(&s - sequences.data()), j}] =
-              scale * scale * static_cast<double>(e[j]);
+        if (c[j] > 0.0f) {
+          windows[{episode, j}] = scale * scale * static_cast<double>(e[j]);
+          positions[{episode, j}] = {world(y_hat[0][j]), world(s.truth[j])};
+        }
     }
     ev.windows[key] = static_cast<std::size_t>(count);
     ev.rmse_m[key] =
@@ -741,11 +752,31 @@ void TrainOptions::Validate() const {
   };
   require(latent_dim >= 2 && latent_dim % 2 == 0, "latent_dim", "must be even and >= 2");
   require(window_s > 0 && std::isfinite(window_s), "window_s", "must be > 0");
-  require(paper_head || anchored_head, "paper_head", "or anchored_head must be set");
   require(!anchored_head || fusion == FusionKind::kUavLoc, "anchored_head",
           "extends the paper's fusion only (fusion \"uavloc\")");
   require(!method.empty(), "method", "must name the method");
 }
+
+namespace {
+
+// test_estimates.csv: each trained head's estimate in every counted test
+// window, per modality subset (what Fig. 15's beams are steered at).
+void WriteTestEstimates(const TrainReport& r, const std::string& path) {
+  std::ostringstream f;
+  f << "method,subset,episode,window,x_m,y_m,z_m,true_x_m,true_y_m,true_z_m\n";
+  f.precision(9);
+  for (const auto& [method, ev] : r.test)
+    for (const auto& [subset, windows] : ev.position_m)
+      for (const auto& [at, p] : windows)
+        f << method << ',' << subset << ',' << at.first << ',' << at.second + 1 << ','
+          << p.estimate_m.x() << ',' << p.estimate_m.y() << ',' << p.estimate_m.z() << ','
+          << p.truth_m.x() << ',' << p.truth_m.y() << ',' << p.truth_m.z() << '\n';
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out << f.str();
+  if (!out) throw std::runtime_error(path + ": cannot write");
+}
+
+}  // namespace
 
 TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& o, const ModelManifest& manifest,
                         const std::string& out_dir) {
@@ -798,8 +829,12 @@ TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& o, const ModelM
   config.position_centre_m = norm.centre_m;
   config.position_scale_m = norm.scale_m;
   const TeAlign align(config.te_align());
-  const std::vector<WindowSequence> train = AlignAll(data.train, encoders, align, norm);
-  const std::vector<WindowSequence> val = AlignAll(data.validation, encoders, align, norm);
+  // Stage 1 only (no head asked for): no sequences to train on.
+  const bool stage2 = o.paper_head || o.anchored_head;
+  const std::vector<WindowSequence> train =
+      stage2 ? AlignAll(data.train, encoders, align, norm) : std::vector<WindowSequence>{};
+  const std::vector<WindowSequence> val =
+      stage2 ? AlignAll(data.validation, encoders, align, norm) : std::vector<WindowSequence>{};
   const std::vector<WindowSequence> test = data.test.empty()
                                                ? std::vector<WindowSequence>{}
                                                : AlignAll(data.test, encoders, align, norm);
@@ -863,6 +898,7 @@ TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& o, const ModelM
   }
 
   if (!data.test.empty()) report.test_decoder = DecoderScores(encoders, data.test, align);
+  WriteTestEstimates(report, (out / "test_estimates.csv").string());
   report.test_common = OnCommonWindows(report.test);
   {
     std::map<std::string, std::map<std::string, Evaluation>> by_weather;  // weather -> method

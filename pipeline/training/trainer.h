@@ -45,6 +45,13 @@ struct Evaluation {
   // episode in the list scored, window index k - 1): what OnCommonWindows
   // intersects. Not written to training_report.json.
   std::map<std::string, std::map<std::pair<std::size_t, std::int64_t>, double>> squared_error_m2;
+  // The same windows' estimate and true position (world ENU, m), keyed as
+  // squared_error_m2: what the downlink's beam is steered at (Fig. 15). Not
+  // in training_report.json (test_estimates.csv holds them).
+  struct Positions {
+    Eigen::Vector3d estimate_m, truth_m;
+  };
+  std::map<std::string, std::map<std::pair<std::size_t, std::int64_t>, Positions>> position_m;
 };
 
 // Each method's scores restricted, per key, to the windows every method of
@@ -65,8 +72,9 @@ struct TrainOptions : TrainingConfig {
   // The node's compressor: the paper's IB head, or its MLP baseline of equal
   // depth and parameter count (the Sec. VI ablation).
   IbBottleneck bottleneck = IbBottleneck::kIb;
-  // The edge heads to train (at least one): the paper's linear head and our
-  // anchored head (pipeline/anchored/anchors.h, measured in NOTES.md).
+  // The edge heads to train: the paper's linear head and our anchored head
+  // (pipeline/anchored/anchors.h, measured in NOTES.md). Neither: stage 1
+  // only (the encoders and their decoders' scores, Figs. 7-9).
   bool paper_head = true;
   bool anchored_head = true;
   // The method the paper-layout head is scored as in the report: "uavloc",
@@ -87,8 +95,8 @@ struct TrainOptions : TrainingConfig {
 
   // Throws std::invalid_argument naming the first bad field: the
   // TrainingConfig rules (training_config.h), then latent_dim (even, >= 2),
-  // window_s (> 0), the heads (at least one; the anchored head only with
-  // the paper's fusion) and method (not empty).
+  // window_s (> 0), the heads (the anchored head only with the paper's
+  // fusion) and method (not empty).
   void Validate() const;
 };
 
@@ -142,7 +150,10 @@ struct TrainReport {
 // Trains on `data` and writes the model folder `out_dir` (model.json from
 // `manifest` with latent_dim, window_s and the training config set from the
 // options, the parts,
-// training_report.json; checkpoints under out_dir/checkpoints while
+// training_report.json, test_estimates.csv (`method,subset,episode,window,
+// x_m,y_m,z_m,true_x_m,true_y_m,true_z_m`: each head's estimate and the truth
+// in every counted test window, by modality subset; episode: index among the
+// test episodes with windows; window: k); checkpoints under out_dir/checkpoints while
 // training, removed at the end). Seeds LibTorch's generator with
 // options.seed first; call InitTorch() before. A modality with observations
 // in training but none in validation is validated on every seventh training

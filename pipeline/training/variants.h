@@ -9,9 +9,11 @@
 // The names are a contract (README): paper (the default), gru, lstm, tcn,
 // te_align, resample_first, resample_middle, resample_random, no_madw,
 // no_mica, no_madw_mica, early_fusion, late_fusion, modality_dropout, hemis,
-// mlp_bottleneck, raw. Torch-free header.
+// mlp_bottleneck, raw, raw_camera, raw_lidar_radar, raw_gru, raw_lstm,
+// raw_tcn. Torch-free header.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -25,11 +27,15 @@ struct Variant {
   const char* description;  // one line for --help and the README
   const char* config;       // JSON object of TrainingConfig keys it sets
   bool mlp_bottleneck;      // the nodes compress with the MLP baseline
-  bool raw;                 // the nodes send raw (not pre-processed) data
-  // Whether the stage-1 encoders of another model (the paper's, same data)
-  // can serve it: false when the variant changes what the nodes send.
-  bool shares_encoders() const { return !mlp_bottleneck && !raw; }
+  // The modalities whose nodes encode raw (not pre-processed) data: bit m
+  // for Modality m (1 camera, 2 LiDAR, 4 radar); 0: all pre-processed.
+  std::uint8_t raw_modalities;
 };
+
+// Whether a model of variant `a` can lend its stage-1 encoders to a training
+// of variant `b`: their nodes send the same latents (same bottleneck, same
+// raw modalities).
+bool SameNodes(const Variant& a, const Variant& b);
 
 // Every variant, `paper` first.
 const std::vector<Variant>& Variants();

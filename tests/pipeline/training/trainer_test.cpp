@@ -735,7 +735,7 @@ TEST_CASE("Trainer: every variant trains on shared stage-1 encoders and lowers i
   REQUIRE(first.stages.size() == 4);
   int trained = 0;
   for (const Variant& v : Variants()) {
-    if (!v.shares_encoders() || std::string(v.name) == "paper") continue;
+    if (!SameNodes(v, *FindVariant("paper")) || std::string(v.name) == "paper") continue;
     INFO("variant " << v.name);
     TrainOptions o = base;
     static_cast<TrainingConfig&>(o) = ApplyVariant(v, base);
@@ -767,7 +767,7 @@ TEST_CASE("Trainer: every variant trains on shared stage-1 encoders and lowers i
     CHECK(EvaluateModel(dir, Synthetic().test).count(v.name) == 1);
     ++trained;
   }
-  CHECK(trained == 14);  // all but paper, mlp_bottleneck and raw
+  CHECK(trained == 14);  // all but paper, mlp_bottleneck and the raw_* ones
 }
 
 TEST_CASE("Variants: names, figures and keys are the issue's contract", "[pipeline]") {
@@ -776,7 +776,8 @@ TEST_CASE("Variants: names, figures and keys are the issue's contract", "[pipeli
   CHECK(names == std::vector<std::string>{
                      "paper", "gru", "lstm", "tcn", "te_align", "resample_first", "resample_middle",
                      "resample_random", "no_madw", "no_mica", "no_madw_mica", "early_fusion",
-                     "late_fusion", "modality_dropout", "hemis", "mlp_bottleneck", "raw"});
+                     "late_fusion", "modality_dropout", "hemis", "mlp_bottleneck", "raw",
+                     "raw_camera", "raw_lidar_radar", "raw_gru", "raw_lstm", "raw_tcn"});
   const TrainingConfig d;
   const auto get = [&](const char* name) { return ApplyVariant(*FindVariant(name), d); };
   CHECK(TrainingConfigJson(get("paper")) == TrainingConfigJson(d));
@@ -794,8 +795,13 @@ TEST_CASE("Variants: names, figures and keys are the issue's contract", "[pipeli
   CHECK(get("hemis").fusion == FusionKind::kHemis);
   CHECK(get("late_fusion").fusion == FusionKind::kLate);
   CHECK(FindVariant("mlp_bottleneck")->mlp_bottleneck);
-  CHECK(FindVariant("raw")->raw);
-  CHECK_FALSE(FindVariant("raw")->shares_encoders());
+  CHECK(FindVariant("raw")->raw_modalities == 7);
+  CHECK(FindVariant("raw_camera")->raw_modalities == 1);       // Tab. IV "LiDAR and radar"
+  CHECK(FindVariant("raw_lidar_radar")->raw_modalities == 6);  // Tab. IV "camera"
+  CHECK_FALSE(SameNodes(*FindVariant("raw"), *FindVariant("paper")));
+  CHECK_FALSE(SameNodes(*FindVariant("mlp_bottleneck"), *FindVariant("paper")));
+  CHECK(SameNodes(*FindVariant("raw_gru"), *FindVariant("raw")));
+  CHECK(get("raw_tcn").temporal == TemporalKind::kTcn);
   CHECK(FindVariant("nope") == nullptr);
   CHECK(VariantMethod("paper") == "uavloc");
   CHECK(VariantMethod("gru") == "gru");
