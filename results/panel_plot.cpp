@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "results/csv.h"
+#include "results/figure_style.h"
 #include "results/gnuplot.h"
 
 namespace uavsim::results {
@@ -36,10 +37,8 @@ constexpr int kCharPx = 8;        // a character of the legend or a panel title,
 constexpr int kTitleCharPx = 9;   // a character of the figure title, roughly
 constexpr int kKeyRowPx = 22;     // a row of the legend
 
-// Colours (Tableau 10) and filled point shapes, cycled; after ten series the
-// lines turn dashed, so that no two series look alike up to 30.
-constexpr const char* kColours[] = {"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd",
-                                    "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22", "#17becf"};
+// Colours (results/figure_style.h) and filled point shapes, cycled; after
+// ten series the lines turn dashed, so that no two series look alike up to 30.
 constexpr int kPointTypes[] = {7, 5, 9, 11, 13, 15};
 
 struct Point {
@@ -55,18 +54,11 @@ struct Panel {
 // The line and points of series number `series`; with many points, a
 // marker on every `interval`-th only.
 std::string Style(std::size_t series, std::size_t interval = 1) {
-  std::string s = "lc rgb '" + std::string(kColours[series % 10]) + "' lw 2 pt " +
-                  std::to_string(kPointTypes[series % 6]) + " ps 1.1";
+  std::string s = "lc rgb '" + std::string(kSeriesColours[series % kSeriesColourCount]) +
+                  "' lw 2 pt " + std::to_string(kPointTypes[series % 6]) + " ps 1.1";
   if (interval > 1) s += " pi " + std::to_string(interval);
   if (series >= 10) s += " dt " + std::to_string(1 + static_cast<int>(series / 10));
   return s;
-}
-
-// Characters of UTF-8 text (continuation bytes not counted).
-int Chars(const std::string& s) {
-  int n = 0;
-  for (char c : s) n += (static_cast<unsigned char>(c) & 0xC0) != 0x80;
-  return n;
 }
 
 // The pixel offsets as a screen coordinate ("at screen f").
@@ -77,28 +69,6 @@ struct Canvas {
     return ShortestNumber(1.0 - static_cast<double>(px_from_top) / height);
   }
 };
-
-// `text` broken at spaces into lines of at most `width` characters (a
-// longer word keeps a line of its own); "" gives no line.
-std::vector<std::string> Wrap(const std::string& text, int width) {
-  std::vector<std::string> lines;
-  std::istringstream words(text);
-  for (std::string word; words >> word;) {
-    if (!lines.empty() && Chars(lines.back()) + 1 + Chars(word) <= width)
-      lines.back() += " " + word;
-    else
-      lines.push_back(word);
-  }
-  return lines;
-}
-
-// A gnuplot string expression of `lines` joined by newlines.
-std::string GnuplotLines(const std::vector<std::string>& lines) {
-  std::string out;
-  for (std::size_t i = 0; i < lines.size(); ++i)
-    out += (i ? " . \"\\n\" . " : "") + GnuplotString(lines[i]);
-  return out.empty() ? "''" : out;
-}
 
 struct Range {
   double lo = 0.0, hi = 0.0;
@@ -207,8 +177,8 @@ std::string PlotPanels(const std::string& csv_path, const PanelPlotSpec& spec) {
   const int n = static_cast<int>(panels.size());
   const PanelGrid grid = ChoosePanelGrid(n, spec.max_columns);
   const std::size_t entries = series_names.size() + (any_band ? 1 : 0);
-  int longest = Chars(any_band ? spec.band_label : std::string());
-  for (const auto& s : series_names) longest = std::max(longest, Chars(s));
+  int longest = Utf8Chars(any_band ? spec.band_label : std::string());
+  for (const auto& s : series_names) longest = std::max(longest, Utf8Chars(s));
   Canvas canvas;
   canvas.width = kGutterPx + grid.columns * spec.panel_width_px + kEdgePx;
   const int entry_px = kCharPx * longest + 70;
@@ -217,13 +187,14 @@ std::string PlotPanels(const std::string& csv_path, const PanelPlotSpec& spec) {
   const int key_px = 18 + (spec.legend_title.empty() ? 0 : kKeyRowPx) + key_rows * kKeyRowPx;
   // Titles wrapped to their width: the figure's above the panels, each
   // panel's above its plot area (all panels as tall as the tallest needs).
-  const std::vector<std::string> title_lines = Wrap(spec.title, (canvas.width - 24) / kTitleCharPx);
+  const std::vector<std::string> title_lines =
+      WrapWords(spec.title, (canvas.width - 24) / kTitleCharPx);
   const int title_px =
       12 + static_cast<int>(title_lines.size()) * kTitleLinePx + (title_lines.empty() ? 0 : 10);
   std::vector<std::vector<std::string>> panel_lines;
   std::size_t most_panel_lines = 1;
   for (const auto& panel : panels) {
-    panel_lines.push_back(Wrap(panel.name, (spec.panel_width_px - 16) / kCharPx));
+    panel_lines.push_back(WrapWords(panel.name, (spec.panel_width_px - 16) / kCharPx));
     most_panel_lines = std::max(most_panel_lines, panel_lines.back().size());
   }
   const int top_px = kTopPx + kPanelLinePx * static_cast<int>(most_panel_lines - 1);
@@ -291,8 +262,8 @@ std::string PlotPanels(const std::string& csv_path, const PanelPlotSpec& spec) {
       const bool band =
           std::any_of(series[s].begin(), series[s].end(), [](const Point& p) { return p.ci > 0; });
       if (band)
-        bands.push_back(data + " using 1:3:4 with filledcurves fc rgb '" + kColours[s % 10] +
-                        "' notitle");
+        bands.push_back(data + " using 1:3:4 with filledcurves fc rgb '" +
+                        kSeriesColours[s % kSeriesColourCount] + "' notitle");
       // Markers name the series; beyond 8 a line, every few suffice.
       const std::size_t interval = (series[s].size() + 7) / 8;
       lines.push_back(data + " using 1:2 with linespoints " + Style(s, interval) + " notitle");
