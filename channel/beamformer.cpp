@@ -55,6 +55,14 @@ double BeamGain(const Eigen::VectorXcd& h, const Eigen::VectorXcd& f) {
   return std::norm(h.dot(f));  // Sec. VI-C: gamma = |h^H f|^2 (Eigen's dot conjugates h)
 }
 
+double LosSteeredGain(const Upa& upa, const Eigen::Vector3d& bs_m,
+                      const Eigen::Vector3d& estimate_m, const Eigen::Vector3d& truth_m) {
+  Eigen::VectorXcd h, f;
+  upa.SteeringInto(DirectionInArray(upa, bs_m, truth_m), &h);
+  SteeredBeamInto(upa, bs_m, estimate_m, &f);
+  return BeamGain(h, f);
+}
+
 double RateBpsHz(double snr_db, double gain) {
   return std::log2(1.0 + std::pow(10.0, snr_db / 10.0) * gain);
 }

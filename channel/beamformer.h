@@ -37,6 +37,14 @@ void SteeredBeamInto(const Upa& upa, const Eigen::Vector3d& bs_m, const Eigen::V
 // gamma = |h^H f|^2. h and f have the same size.
 double BeamGain(const Eigen::VectorXcd& h, const Eigen::VectorXcd& f);
 
+// The gain of a line-of-sight channel h = a(u_true) (unit path gain, no
+// blockage) with the beam steered from bs_m at estimate_m: |a(u_true)^H f|^2,
+// Mx My when the estimate lies on the true direction. Positions world ENU
+// (m); a position within 1 cm of bs_m is taken as broadside. What
+// `uavsim reproduce` scores Fig. 15 with.
+double LosSteeredGain(const Upa& upa, const Eigen::Vector3d& bs_m,
+                      const Eigen::Vector3d& estimate_m, const Eigen::Vector3d& truth_m);
+
 // log2(1 + 10^(snr_db / 10) gain), bit/s/Hz.
 double RateBpsHz(double snr_db, double gain);
 

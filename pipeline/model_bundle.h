@@ -37,10 +37,10 @@ struct ModelManifest {
   std::string lidar = "lidar.json";
   std::string radar = "radar.json";
   // The edge networks' weights (sidecars: + ".json"), either may be empty
-  // (not trained; both: a model of stage-1 encoders only): the paper's head (`uavloc`) and the anchored
-  // head (`uavloc_anchored`). Each file's sidecar says which head it holds
-  // (models written before the anchored head got its own key hold it in
-  // `edge`; Load serves it as `uavloc_anchored`).
+  // (not trained; both: a model of stage-1 encoders only): the paper's head (`uavloc`) and the
+  // anchored head (`uavloc_anchored`). Each file's sidecar says which head it holds (models written
+  // before the anchored head got its own key hold it in `edge`; Load serves it as
+  // `uavloc_anchored`).
   std::string edge = "uavloc.pt";
   std::string anchored_edge;
   // The variant it is (pipeline/training/variants.h; absent: "paper"): the

@@ -28,11 +28,11 @@
 #include "sim/core/error.h"
 #include "sim/dataset_export.h"
 #include "sim/edge_server.h"
+#include "sim/reproduce.h"
 #include "sim/run.h"
 #include "sim/scenario.h"
 #include "sim/sweep.h"
 #include "sim/sweep_spec.h"
-#include "sim/reproduce.h"
 #include "sim/train.h"
 #include "sim/version.h"
 
@@ -147,7 +147,7 @@ const char* kTrainHelp =
     "                    [--config-set /ptr=value]... [--quick] [--seed N] [--episodes N]\n"
     "                    [--episode-s S] [--data-seed N] [--bottleneck ib|mlp] [--head H]\n"
     "                    [--threads N]"
-" [--jobs N] [--data FILE] [--split trajectory|frame]\n"
+    " [--jobs N] [--data FILE] [--split trajectory|frame]\n"
     "                    [--train-episodes N] [--set /ptr=value]... [--force] [--quiet]\n"
     "       mpirun -np K uavsim train SCENARIO.json ... (every rank simulates episodes)\n"
     "\n"
@@ -528,9 +528,9 @@ const std::map<std::string, std::string>& ReplacedTrainFlags() {
 
 int Train(int argc, char** argv) {
   std::set<std::string> value_options{
-      "--out",   "--seed",           "--episodes",   "--episode-s", "--threads", "--jobs",
-      "--set",   "--data",           "--bottleneck", "--head",      "--config",  "--config-set",
-      "--split", "--train-episodes", "--variant",    "--encoders", "--data-seed"};
+      "--out",   "--seed",           "--episodes",   "--episode-s", "--threads",  "--jobs",
+      "--set",   "--data",           "--bottleneck", "--head",      "--config",   "--config-set",
+      "--split", "--train-episodes", "--variant",    "--encoders",  "--data-seed"};
   const auto refuse_replaced = [](const std::string& flag) {
     const auto it = ReplacedTrainFlags().find(flag);
     if (it == ReplacedTrainFlags().end()) return;
@@ -764,10 +764,9 @@ int Sweep(int argc, char** argv) {
 }
 
 int Reproduce(int argc, char** argv) {
-  const ParsedArgs a =
-      Parse("reproduce", argc, argv, 2,
-            {"--scenario", "--out", "--jobs", "--seeds", "--episodes", "--set"},
-            {"--quick", "--quiet", "--help"});
+  const ParsedArgs a = Parse("reproduce", argc, argv, 2,
+                             {"--scenario", "--out", "--jobs", "--seeds", "--episodes", "--set"},
+                             {"--quick", "--quiet", "--help"});
   if (a.Has("--help")) return std::cout << kReproduceHelp, kExitOk;
   if (!a.positional.empty())
     throw UsageError("uavsim reproduce: unexpected argument '" + a.positional[0] +
@@ -787,8 +786,7 @@ int Reproduce(int argc, char** argv) {
     o.episodes = static_cast<int>(UnsignedOption("reproduce", "--episodes", *v, 100000));
   if (o.jobs < 1 || (a.Value("--seeds") && o.seeds < 1) ||
       (a.Value("--episodes") && o.episodes < 3))
-    throw UsageError(
-        "uavsim reproduce: --jobs and --seeds need at least 1, --episodes at least 3");
+    throw UsageError("uavsim reproduce: --jobs and --seeds need at least 1, --episodes at least 3");
   o.command_line = "uavsim";
   for (int i = 1; i < argc; ++i) o.command_line += " " + std::string(argv[i]);
   const uavsim::sim::Scenario s = uavsim::sim::LoadScenario(o.scenario_file, Overrides(a));

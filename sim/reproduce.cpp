@@ -34,10 +34,20 @@ using core::Json;
 constexpr const char* kFormat = "uavsim-reproduce/1";
 
 // The stage-2 variants on the paper arm's encoders (Figs. 11a-14).
-constexpr const char* kOnPaperEncoders[] = {
-    "gru",     "lstm",         "tcn",          "te_align",    "resample_first",
-    "resample_middle", "resample_random", "no_madw", "no_mica", "no_madw_mica",
-    "early_fusion",    "late_fusion",     "modality_dropout", "hemis"};
+constexpr const char* kOnPaperEncoders[] = {"gru",
+                                            "lstm",
+                                            "tcn",
+                                            "te_align",
+                                            "resample_first",
+                                            "resample_middle",
+                                            "resample_random",
+                                            "no_madw",
+                                            "no_mica",
+                                            "no_madw_mica",
+                                            "early_fusion",
+                                            "late_fusion",
+                                            "modality_dropout",
+                                            "hemis"};
 // And on the raw arm's (Fig. 11b).
 constexpr const char* kOnRawEncoders[] = {"raw_gru", "raw_lstm", "raw_tcn"};
 
@@ -138,8 +148,8 @@ void RunDataRates(const Scenario& base, const ReproducePlan& plan, const std::st
 
 // DIR/invocations.csv gets a row per invocation that got past the
 // episodes: when it started, its wall time, what it trained.
-void LogInvocation(const std::string& dir, const std::string& started_utc, double wall_s,
-                   int jobs, std::size_t trained, std::size_t failed) {
+void LogInvocation(const std::string& dir, const std::string& started_utc, double wall_s, int jobs,
+                   std::size_t trained, std::size_t failed) {
   const std::string file = (fs::path(dir) / "invocations.csv").string();
   std::error_code ec;
   std::string text = fs::is_regular_file(file, ec) ? core::ReadFileBytes(file)
@@ -161,11 +171,16 @@ std::string UtcNow() {
 
 std::string EpisodeSetName(std::uint8_t raw) {
   switch (raw) {
-    case 0: return "pre";
-    case 7: return "raw";
-    case 1: return "raw_camera";
-    case 6: return "raw_lidar_radar";
-    default: return "raw" + std::to_string(raw);
+    case 0:
+      return "pre";
+    case 7:
+      return "raw";
+    case 1:
+      return "raw_camera";
+    case 6:
+      return "raw_lidar_radar";
+    default:
+      return "raw" + std::to_string(raw);
   }
 }
 

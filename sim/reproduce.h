@@ -47,16 +47,16 @@ struct ReproduceOptions {
   bool quick = false;         // the toy plan (ReproducePlan below)
   int jobs = 1;               // trainings (and episodes) at a time, per rank under mpirun
   bool quiet = false;
-  int seeds = 0;              // training seeds (0: the plan's, 3)
-  int episodes = 0;           // per set (0: the plan's)
-  std::string command_line;   // written into every model's note and the report
+  int seeds = 0;             // training seeds (0: the plan's, 3)
+  int episodes = 0;          // per set (0: the plan's)
+  std::string command_line;  // written into every model's note and the report
 };
 
 // One training of the plan.
 struct ReproduceArm {
-  std::string id;        // its folder under DIR/models: "<variant>-z<z>-s<seed>[-frame]"
-  std::string variant;   // pipeline::FindVariant name
-  int latent_dim = 16;   // z
+  std::string id;       // its folder under DIR/models: "<variant>-z<z>-s<seed>[-frame]"
+  std::string variant;  // pipeline::FindVariant name
+  int latent_dim = 16;  // z
   std::uint64_t seed = 1;
   std::string set;       // the episode set: EpisodeSetName of the variant's raw modalities
   std::string encoders;  // id of the arm whose stage-1 encoders it reuses ("": trains them)
@@ -70,9 +70,9 @@ struct ReproducePlan {
   std::vector<int> latent_dims;       // Figs. 7-9, Tab. II
   int scenario_latent_dim = 16;       // the z of the edge-network arms
   int seeds = 3;
-  double rate_run_s = 30.0;           // Tab. II: simulated seconds of each data-rate run
-  int beam_upa = 32;                  // Fig. 15: the base station's array is beam_upa^2
-  std::vector<ReproduceArm> arms;     // stage-1 arms before the arms that reuse them
+  double rate_run_s = 30.0;        // Tab. II: simulated seconds of each data-rate run
+  int beam_upa = 32;               // Fig. 15: the base station's array is beam_upa^2
+  std::vector<ReproduceArm> arms;  // stage-1 arms before the arms that reuse them
 };
 
 // "pre", "raw", "raw_camera", "raw_lidar_radar" for the raw-modality masks
@@ -91,10 +91,10 @@ struct ReproduceOutcome {
   std::size_t arms = 0;          // in the plan
   std::size_t already_done = 0;  // found trained when the command started
   std::size_t ran = 0;
-  std::size_t failed = 0;        // their messages went to stderr; rerun to retry
-  bool reported = false;         // the artefacts and report.md/html written
-  bool mpi_worker = false;       // a rank other than 0
-  double wall_s = 0.0;           // this invocation
+  std::size_t failed = 0;             // their messages went to stderr; rerun to retry
+  bool reported = false;              // the artefacts and report.md/html written
+  bool mpi_worker = false;            // a rank other than 0
+  double wall_s = 0.0;                // this invocation
   std::vector<std::string> warnings;  // figures not drawn
 };
 

@@ -41,27 +41,10 @@ const char* const kModalities[] = {"camera", "lidar", "radar"};
 // Statistics over seeds.
 
 using Seeds = std::vector<double>;  // [seed - 1]; NaN where missing
+using Stat = SeedStat;
+using Comparison = SeedComparison;
 
-struct Stat {
-  double mean = kNaN;
-  double ci95 = kNaN;  // half-width; NaN for fewer than 2 values
-  int n = 0;
-};
-
-Stat Summarise(const Seeds& v) {
-  Stat s;
-  double sum = 0.0;
-  for (double x : v)
-    if (std::isfinite(x)) sum += x, ++s.n;
-  if (s.n == 0) return s;
-  s.mean = sum / s.n;
-  if (s.n < 2) return s;
-  double ss = 0.0;
-  for (double x : v)
-    if (std::isfinite(x)) ss += (x - s.mean) * (x - s.mean);
-  s.ci95 = results::StudentT975(s.n - 1) * std::sqrt(ss / (s.n - 1)) / std::sqrt(s.n);
-  return s;
-}
+Stat Summarise(const Seeds& v) { return SummariseSeeds(v); }
 
 std::string Fixed(double x, int decimals) {
   return std::isfinite(x) ? results::FormatFixed(x, decimals) : "";
@@ -75,62 +58,27 @@ std::string MeanCi(const Stat& s, int decimals = 2) {
   return t;
 }
 
-// ---------------------------------------------------------------------------
-// Comparisons and claims.
-
-struct Comparison {
-  std::string what;  // "te_align below resample_first (all)"
-  Stat diff;         // worse - better per seed: the claim says > 0
-  int sign = 0;      // +1 holds, -1 reversed, 0 within noise (or no data)
-};
-
-// "better below worse", seed by seed.
 Comparison Compare(const std::string& what, const Seeds& better, const Seeds& worse) {
-  Seeds d;
-  for (std::size_t i = 0; i < better.size() && i < worse.size(); ++i)
-    if (std::isfinite(better[i]) && std::isfinite(worse[i])) d.push_back(worse[i] - better[i]);
-  Comparison c;
-  c.what = what;
-  c.diff = Summarise(d);
-  if (c.diff.n == 0) return c;
-  if (!std::isfinite(c.diff.ci95)) {
-    c.sign = c.diff.mean > 0 ? 1 : (c.diff.mean < 0 ? -1 : 0);
-  } else if (c.diff.mean - c.diff.ci95 > 0) {
-    c.sign = 1;
-  } else if (c.diff.mean + c.diff.ci95 < 0) {
-    c.sign = -1;
-  }
-  return c;
+  return CompareSeeds(what, better, worse);
 }
+
+// ---------------------------------------------------------------------------
+// Claims.
 
 struct Claim {
   std::string artefact;  // "Fig. 12"
   std::string paper;     // what the paper says
   std::string ours;      // our numbers in a phrase
   std::vector<Comparison> comparisons;
-  bool most = false;     // the paper says "in most cases"
-  std::string verdict;   // holds / does not hold / mixed
-  std::string detail;    // how many comparisons hold
+  bool most = false;    // the paper says "in most cases"
+  std::string verdict;  // holds / does not hold / mixed
+  std::string detail;   // how many comparisons hold
   // The same claim on the frame split (Fig. 10a), "" when not measured.
   std::string frame_verdict;
 };
 
 std::string Verdict(const std::vector<Comparison>& cs, bool most, std::string* detail) {
-  int hold = 0, reversed = 0, noise = 0;
-  for (const Comparison& c : cs) (c.sign > 0 ? hold : c.sign < 0 ? reversed : noise)++;
-  const int n = static_cast<int>(cs.size());
-  if (detail) {
-    *detail = std::to_string(hold) + " of " + std::to_string(n) + " comparisons hold";
-    if (reversed) *detail += ", " + std::to_string(reversed) + " reversed";
-    if (noise) *detail += ", " + std::to_string(noise) + " within noise";
-  }
-  if (n == 0) return "not measured";
-  if (most ? (2 * hold > n && reversed == 0) : hold == n) return "holds";
-  if (hold == 0) {
-    if (detail && reversed == 0) *detail += " (none reversed: not resolved at this many seeds)";
-    return "does not hold";
-  }
-  return "mixed";
+  return ClaimVerdict(cs, most, detail);
 }
 
 void Decide(Claim& c) { c.verdict = Verdict(c.comparisons, c.most, &c.detail); }
@@ -207,9 +155,9 @@ class Arms {
 
 struct Block {
   enum Kind { kHeading, kText, kTable, kImage } kind = kText;
-  std::string text;                              // heading, paragraph, image caption
-  std::string file;                              // image: PNG beside the report
-  std::vector<std::vector<std::string>> rows;    // table: header first
+  std::string text;                            // heading, paragraph, image caption
+  std::string file;                            // image: PNG beside the report
+  std::vector<std::vector<std::string>> rows;  // table: header first
 };
 
 struct Document {
@@ -236,9 +184,15 @@ std::string RenderMarkdown(const std::string& title, const Document& d) {
   for (const Block& b : d.blocks) {
     md << "\n";
     switch (b.kind) {
-      case Block::kHeading: md << "## " << b.text << "\n"; break;
-      case Block::kText: md << b.text << "\n"; break;
-      case Block::kImage: md << "![" << b.text << "](" << b.file << ")\n"; break;
+      case Block::kHeading:
+        md << "## " << b.text << "\n";
+        break;
+      case Block::kText:
+        md << b.text << "\n";
+        break;
+      case Block::kImage:
+        md << "![" << b.text << "](" << b.file << ")\n";
+        break;
       case Block::kTable:
         for (std::size_t r = 0; r < b.rows.size(); ++r) {
           md << "|";
@@ -300,8 +254,12 @@ std::string RenderHtml(const std::string& title, const Document& d) {
     << results::HtmlEscape(title) << "</h1>\n";
   for (const Block& b : d.blocks) {
     switch (b.kind) {
-      case Block::kHeading: h << "<h2>" << results::HtmlEscape(b.text) << "</h2>\n"; break;
-      case Block::kText: h << "<p>" << HtmlText(b.text) << "</p>\n"; break;
+      case Block::kHeading:
+        h << "<h2>" << results::HtmlEscape(b.text) << "</h2>\n";
+        break;
+      case Block::kText:
+        h << "<p>" << HtmlText(b.text) << "</p>\n";
+        break;
       case Block::kImage:
         h << "<figure><img src=\"" << results::HtmlEscape(b.file) << "\" alt=\""
           << results::HtmlEscape(b.text) << "\"><figcaption>" << results::HtmlEscape(b.text)
@@ -432,7 +390,7 @@ Claim& AddClaim(Writer& w, const std::string& artefact, const std::string& paper
 std::vector<Comparison> MoreModalitiesBetter(const std::map<std::string, Seeds>& v,
                                              const std::string& tag) {
   const std::vector<std::pair<std::string, std::string>> pairs = {
-      {"all", "camera+lidar"},   {"all", "camera+radar"},   {"all", "lidar+radar"},
+      {"all", "camera+lidar"},    {"all", "camera+radar"},   {"all", "lidar+radar"},
       {"camera+lidar", "camera"}, {"camera+lidar", "lidar"}, {"camera+radar", "camera"},
       {"camera+radar", "radar"},  {"lidar+radar", "lidar"},  {"lidar+radar", "radar"}};
   std::vector<Comparison> out;
@@ -471,8 +429,8 @@ void DecoderFigures(Writer& w, const Arms& arms, const ReproducePlan& plan) {
       for (const auto& [label, variant] : schemes) {
         v[label][z] = arms.Decoder(variant, z, modality);
         const Stat s = Summarise(v[label][z]);
-        csv << z << "," << label << "," << Fixed(s.mean, 6) << "," << Fixed(s.ci95, 6) << ","
-            << s.n << "\n";
+        csv << z << "," << label << "," << Fixed(s.mean, 6) << "," << Fixed(s.ci95, 6) << "," << s.n
+            << "\n";
         row.push_back(MeanCi(s));
       }
       table.push_back(row);
@@ -497,14 +455,15 @@ void DecoderFigures(Writer& w, const Arms& arms, const ReproducePlan& plan) {
 
     const std::string f = figure[m];
     {
-      Claim& c = AddClaim(w, f, "Pre-processing lowers the " + modality +
-                                    " error at every latent size (\"the scheme with included "
-                                    "preprocessing consistently outperforms\")");
+      Claim& c = AddClaim(w, f,
+                          "Pre-processing lowers the " + modality +
+                              " error at every latent size (\"the scheme with included "
+                              "preprocessing consistently outperforms\")");
       for (int z : plan.latent_dims)
         c.comparisons.push_back(Compare("pre-processed below raw, z " + std::to_string(z),
                                         v["IB"][z], v["IB without pre-processing"][z]));
-      c.ours = "z " + std::to_string(arms.z0()) + ": " +
-               MeanCi(Summarise(v["IB"][arms.z0()])) + " m pre-processed vs " +
+      c.ours = "z " + std::to_string(arms.z0()) + ": " + MeanCi(Summarise(v["IB"][arms.z0()])) +
+               " m pre-processed vs " +
                MeanCi(Summarise(v["IB without pre-processing"][arms.z0()])) + " m raw";
       Decide(c);
     }
@@ -527,9 +486,9 @@ void DecoderFigures(Writer& w, const Arms& arms, const ReproducePlan& plan) {
     if (m == 0) {
       Claim& c = AddClaim(w, f, "With the MLP, the camera error decreases as z grows");
       const int lo = plan.latent_dims.front(), hi = plan.latent_dims.back();
-      c.comparisons.push_back(Compare("MLP z " + std::to_string(hi) + " below z " +
-                                          std::to_string(lo),
-                                      v["MLP"][hi], v["MLP"][lo]));
+      c.comparisons.push_back(
+          Compare("MLP z " + std::to_string(hi) + " below z " + std::to_string(lo), v["MLP"][hi],
+                  v["MLP"][lo]));
       c.ours = "z " + std::to_string(lo) + ": " + MeanCi(Summarise(v["MLP"][lo])) + " m, z " +
                std::to_string(hi) + ": " + MeanCi(Summarise(v["MLP"][hi])) + " m";
       Decide(c);
@@ -555,8 +514,8 @@ void DataRateTable(Writer& w, const ReproducePlan& plan) {
   const int z0 = plan.scenario_latent_dim;
   std::ostringstream csv;
   csv << "modality,source,stage,z,kBps,percent_of_original\n";
-  std::vector<std::vector<std::string>> table{{"modality", "source", "original (KB/s)",
-                                               "pre-processed (KB/s, %)"}};
+  std::vector<std::vector<std::string>> table{
+      {"modality", "source", "original (KB/s)", "pre-processed (KB/s, %)"}};
   for (int z : paper_z) table[0].push_back("IB z=" + std::to_string(z) + " (KB/s, %)");
   std::vector<Bar> bars;
   std::map<std::string, double> pre_pct;
@@ -569,8 +528,7 @@ void DataRateTable(Writer& w, const ReproducePlan& plan) {
     const Json& r = metrics[z0]["data_rate_kBps"][modality];
     const double raw = r["raw"].get<double>(), pre = r["preprocessed"].get<double>();
     pre_pct[modality] = pct(pre, raw);
-    std::vector<std::string> ours{modality, "uavsim", results::FormatFixed(raw, 1),
-                                  cell(pre, raw)};
+    std::vector<std::string> ours{modality, "uavsim", results::FormatFixed(raw, 1), cell(pre, raw)};
     csv << modality << ",uavsim,original,," << Fixed(raw, 6) << ",100\n";
     csv << modality << ",uavsim,preprocessed,," << Fixed(pre, 6) << "," << Fixed(pct(pre, raw), 6)
         << "\n";
@@ -634,15 +592,15 @@ void DataRateTable(Writer& w, const ReproducePlan& plan) {
     Claim& c = AddClaim(w, "Table II",
                         "Pre-processing reduces the camera and radar data rates to 20-30 % of the "
                         "original");
-    c.ours = "camera " + Fixed(pre_pct["camera"], 3) + " %, radar " + Fixed(pre_pct["radar"], 3) +
-             " %";
-    const bool in = pre_pct["camera"] >= 20 && pre_pct["camera"] <= 30 &&
-                    pre_pct["radar"] >= 20 && pre_pct["radar"] <= 30;
+    c.ours =
+        "camera " + Fixed(pre_pct["camera"], 3) + " %, radar " + Fixed(pre_pct["radar"], 3) + " %";
+    const bool in = pre_pct["camera"] >= 20 && pre_pct["camera"] <= 30 && pre_pct["radar"] >= 20 &&
+                    pre_pct["radar"] <= 30;
     const bool below = pre_pct["camera"] < 100 && pre_pct["radar"] < 100;
     c.verdict = in ? "holds" : below ? "mixed" : "does not hold";
-    c.detail = in ? "both within 20-30 %"
-                  : below ? "both reduced, not to 20-30 % (the sensors differ from MMAUD's)"
-                          : "not reduced";
+    c.detail = in      ? "both within 20-30 %"
+               : below ? "both reduced, not to 20-30 % (the sensors differ from MMAUD's)"
+                       : "not reduced";
   }
   {
     Claim& c = AddClaim(w, "Table II",
@@ -654,8 +612,7 @@ void DataRateTable(Writer& w, const ReproducePlan& plan) {
     c.detail = "criterion: LiDAR's share below the camera's and the radar's";
   }
   {
-    Claim& c = AddClaim(w, "Table II",
-                        "IB compression brings every modality down to a few KB/s");
+    Claim& c = AddClaim(w, "Table II", "IB compression brings every modality down to a few KB/s");
     c.ours = "at most " + Fixed(max_compressed_16, 3) + " KB/s for z <= 16";
     c.verdict = max_compressed_16 <= 10.0 ? "holds" : "does not hold";
     c.detail = "criterion: every modality at most 10 KB/s for z <= 16";
@@ -739,18 +696,18 @@ void RateFigure(Writer& w, const Arms& arms, const ReproducePlan& plan, const Sc
   channel::BaseStationConfig bs = base.base_station;
   bs.upa.mx = bs.upa.my = plan.beam_upa;
   const channel::Upa upa = channel::Upa::FromConfig(bs);
-  const std::vector<double> snr =
-      channel::SnrGridDb(base.outputs.snr_db.from, base.outputs.snr_db.to, base.outputs.snr_db.step);
+  const std::vector<double> snr = channel::SnrGridDb(
+      base.outputs.snr_db.from, base.outputs.snr_db.to, base.outputs.snr_db.step);
   const double n_elements = static_cast<double>(bs.upa.mx) * bs.upa.my;
   // beam -> snr index -> seeds
   std::map<std::string, std::vector<Seeds>> rates;
   std::vector<std::string> beams{"perfect"};
   for (const std::string& s : Subsets()) beams.push_back(s);
   for (const std::string& b : beams) rates[b].assign(snr.size(), Seeds(plan.seeds, kNaN));
-  Eigen::VectorXcd a, f;
   for (int seed = 1; seed <= plan.seeds; ++seed) {
     results::CsvFile est;
-    const std::string file = (fs::path(arms.ModelDir("paper", seed)) / "test_estimates.csv").string();
+    const std::string file =
+        (fs::path(arms.ModelDir("paper", seed)) / "test_estimates.csv").string();
     const std::string error = results::ReadCsvFile(file, &est);
     if (!error.empty()) throw std::runtime_error(file + ": " + error);
     const long cm = est.Column("method"), cs = est.Column("subset");
@@ -760,14 +717,14 @@ void RateFigure(Writer& w, const Arms& arms, const ReproducePlan& plan, const Sc
     std::map<std::string, std::size_t> counts;
     for (const auto& row : est.rows) {
       if (row[static_cast<std::size_t>(cm)] != "uavloc") continue;
-      const auto at = [&](long c, int k) { return std::stod(row[static_cast<std::size_t>(c + k)]); };
+      const auto at = [&](long c, int k) {
+        return std::stod(row[static_cast<std::size_t>(c + k)]);
+      };
       const Eigen::Vector3d p(at(cx, 0), at(cx, 1), at(cx, 2));
       const Eigen::Vector3d t(at(ctx, 0), at(ctx, 1), at(ctx, 2));
       // Line of sight: h = a(u_true); gamma = |h^H f|^2 with f steered at
       // the estimate (perfect: gamma = Mx My).
-      upa.SteeringInto(upa.ToArrayFrame((t - bs.position_m).normalized()), &a);
-      channel::SteeredBeamInto(upa, bs.position_m, p, &f);
-      const double gamma = channel::BeamGain(a, f);
+      const double gamma = channel::LosSteeredGain(upa, bs.position_m, p, t);
       const std::string& subset = row[static_cast<std::size_t>(cs)];
       for (const auto& [beam, g] : {std::pair<std::string, double>{subset, gamma},
                                     std::pair<std::string, double>{"perfect", n_elements}}) {
@@ -875,6 +832,58 @@ void RateFigure(Writer& w, const Arms& arms, const ReproducePlan& plan, const Sc
 
 }  // namespace
 
+SeedStat SummariseSeeds(const std::vector<double>& v) {
+  SeedStat s;
+  double sum = 0.0;
+  for (double x : v)
+    if (std::isfinite(x)) sum += x, ++s.n;
+  if (s.n == 0) return s;
+  s.mean = sum / s.n;
+  if (s.n < 2) return s;
+  double ss = 0.0;
+  for (double x : v)
+    if (std::isfinite(x)) ss += (x - s.mean) * (x - s.mean);
+  s.ci95 = results::StudentT975(s.n - 1) * std::sqrt(ss / (s.n - 1)) / std::sqrt(s.n);
+  return s;
+}
+
+SeedComparison CompareSeeds(const std::string& what, const std::vector<double>& better,
+                            const std::vector<double>& worse) {
+  std::vector<double> d;
+  for (std::size_t i = 0; i < better.size() && i < worse.size(); ++i)
+    if (std::isfinite(better[i]) && std::isfinite(worse[i])) d.push_back(worse[i] - better[i]);
+  SeedComparison c;
+  c.what = what;
+  c.diff = SummariseSeeds(d);
+  if (c.diff.n == 0) return c;
+  if (!std::isfinite(c.diff.ci95)) {
+    c.sign = c.diff.mean > 0 ? 1 : (c.diff.mean < 0 ? -1 : 0);
+  } else if (c.diff.mean - c.diff.ci95 > 0) {
+    c.sign = 1;
+  } else if (c.diff.mean + c.diff.ci95 < 0) {
+    c.sign = -1;
+  }
+  return c;
+}
+
+std::string ClaimVerdict(const std::vector<SeedComparison>& cs, bool most, std::string* detail) {
+  int hold = 0, reversed = 0, noise = 0;
+  for (const SeedComparison& c : cs) (c.sign > 0 ? hold : c.sign < 0 ? reversed : noise)++;
+  const int n = static_cast<int>(cs.size());
+  if (detail) {
+    *detail = std::to_string(hold) + " of " + std::to_string(n) + " comparisons hold";
+    if (reversed) *detail += ", " + std::to_string(reversed) + " reversed";
+    if (noise) *detail += ", " + std::to_string(noise) + " within noise";
+  }
+  if (n == 0) return "not measured";
+  if (most ? (2 * hold > n && reversed == 0) : hold == n) return "holds";
+  if (hold == 0) {
+    if (detail && reversed == 0) *detail += " (none reversed: not resolved at this many seeds)";
+    return "does not hold";
+  }
+  return "mixed";
+}
+
 std::vector<std::string> WriteReproduceReport(const ReproduceReportInputs& in) {
   const ReproducePlan& plan = *in.plan;
   const Scenario& base = *in.scenario;
@@ -883,24 +892,26 @@ std::vector<std::string> WriteReproduceReport(const ReproduceReportInputs& in) {
   w.dir = in.dir;
   Document& doc = w.doc;
 
-  doc.Text("Scenario `" + base.name + "`" + (in.quick ? " at toy size (`--quick`: its numbers "
-                                                         "say nothing about the paper; the full "
-                                                         "plan does)"
-                                                       : "") +
+  doc.Text("Scenario `" + base.name + "`" +
+           (in.quick ? " at toy size (`--quick`: its numbers "
+                       "say nothing about the paper; the full "
+                       "plan does)"
+                     : "") +
            "; uavsim " + Version() + " (" + GitHash() + "). Command: `" + in.command_line + "`.");
-  doc.Text("Protocol: " + std::to_string(plan.episodes.episodes) + " simulated flights of " +
-           core::FormatNumber(plan.episodes.episode_s) +
-           " s per episode set (the same flights, weather and uplink loss in every set; sets differ "
-           "in what the nodes pre-process), split by trajectory 70/15/15 (held-out flights; Fig. "
-           "10a also by frame, the split common in the literature, as a second column); " +
-           std::to_string(plan.seeds) +
-           " training seeds (each its own split, initial weights and dropout); every value is the "
-           "mean over seeds with its 95 % confidence interval (Student t). Verdicts compare "
-           "methods seed by seed on the same held-out flights: a comparison holds when the "
-           "interval of the difference lies on the paper's side of 0, is reversed when on the "
-           "other, else is within noise.");
-  doc.Text("Trainings: " + std::to_string(arms.count()) + " (" +
-           std::to_string(in.trained_now) + " by this invocation), " +
+  doc.Text(
+      "Protocol: " + std::to_string(plan.episodes.episodes) + " simulated flights of " +
+      core::FormatNumber(plan.episodes.episode_s) +
+      " s per episode set (the same flights, weather and uplink loss in every set; sets differ "
+      "in what the nodes pre-process), split by trajectory 70/15/15 (held-out flights; Fig. "
+      "10a also by frame, the split common in the literature, as a second column); " +
+      std::to_string(plan.seeds) +
+      " training seeds (each its own split, initial weights and dropout); every value is the "
+      "mean over seeds with its 95 % confidence interval (Student t). Verdicts compare "
+      "methods seed by seed on the same held-out flights: a comparison holds when the "
+      "interval of the difference lies on the paper's side of 0, is reversed when on the "
+      "other, else is within noise.");
+  doc.Text("Trainings: " + std::to_string(arms.count()) + " (" + std::to_string(in.trained_now) +
+           " by this invocation), " +
            core::FormatNumber(std::round(arms.TrainingSeconds() / 60.0)) +
            " CPU-minutes of training in all; this invocation's wall time " +
            core::FormatNumber(std::round(in.wall_s / 6.0) / 10.0) +
@@ -946,7 +957,8 @@ std::vector<std::string> WriteReproduceReport(const ReproduceReportInputs& in) {
                         "modality combination)");
     for (const std::string& s : Subsets())
       c.comparisons.push_back(Compare("pre-processed below raw, " + s,
-                                      pre.at("by trajectory").at(s), raw.at("by trajectory").at(s)));
+                                      pre.at("by trajectory").at(s),
+                                      raw.at("by trajectory").at(s)));
     c.ours = "all: " + Summary(pre.at("by trajectory"), "all") + " vs " +
              Summary(raw.at("by trajectory"), "all") + " m";
     Decide(c);
@@ -1000,26 +1012,23 @@ std::vector<std::string> WriteReproduceReport(const ReproduceReportInputs& in) {
     Claim& c = AddClaim(w, "Table IV",
                         "RMSE falls in the order: no pre-processing, LiDAR and radar only, camera "
                         "only, all three (0.372 > 0.095 > 0.035 > 0.022 m)");
-    c.comparisons = {
-        Compare("LiDAR and radar below none", v["LiDAR and radar"], v["no modality"]),
-        Compare("camera below LiDAR and radar", v["camera"], v["LiDAR and radar"]),
-        Compare("three below camera", v["three modalities"], v["camera"])};
-    c.ours = MeanCi(Summarise(v["no modality"])) + " / " +
-             MeanCi(Summarise(v["LiDAR and radar"])) + " / " + MeanCi(Summarise(v["camera"])) +
-             " / " + MeanCi(Summarise(v["three modalities"])) + " m";
+    c.comparisons = {Compare("LiDAR and radar below none", v["LiDAR and radar"], v["no modality"]),
+                     Compare("camera below LiDAR and radar", v["camera"], v["LiDAR and radar"]),
+                     Compare("three below camera", v["three modalities"], v["camera"])};
+    c.ours = MeanCi(Summarise(v["no modality"])) + " / " + MeanCi(Summarise(v["LiDAR and radar"])) +
+             " / " + MeanCi(Summarise(v["camera"])) + " / " +
+             MeanCi(Summarise(v["three modalities"])) + " m";
     Decide(c);
   }
 
   // Fig. 11.
   doc.Heading("Fig. 11: temporal networks");
-  const auto t_pre = SubsetFigure(w, arms, "fig11a_temporal_preprocessed",
-                                  "Fig. 11a: temporal networks, with pre-processing",
-                                  {{"Mamba", "paper"}, {"GRU", "gru"}, {"LSTM", "lstm"},
-                                   {"TCN", "tcn"}});
-  const auto t_raw = SubsetFigure(w, arms, "fig11b_temporal_raw",
-                                  "Fig. 11b: temporal networks, without pre-processing",
-                                  {{"Mamba", "raw"}, {"GRU", "raw_gru"}, {"LSTM", "raw_lstm"},
-                                   {"TCN", "raw_tcn"}});
+  const auto t_pre = SubsetFigure(
+      w, arms, "fig11a_temporal_preprocessed", "Fig. 11a: temporal networks, with pre-processing",
+      {{"Mamba", "paper"}, {"GRU", "gru"}, {"LSTM", "lstm"}, {"TCN", "tcn"}});
+  const auto t_raw = SubsetFigure(
+      w, arms, "fig11b_temporal_raw", "Fig. 11b: temporal networks, without pre-processing",
+      {{"Mamba", "raw"}, {"GRU", "raw_gru"}, {"LSTM", "raw_lstm"}, {"TCN", "raw_tcn"}});
   const std::vector<std::string> temporal = {"Mamba", "GRU", "LSTM", "TCN"};
   {
     Claim& c = AddClaim(w, "Fig. 11a",
@@ -1033,8 +1042,8 @@ std::vector<std::string> WriteReproduceReport(const ReproduceReportInputs& in) {
     Decide(c);
   }
   {
-    Claim& c = AddClaim(w, "Fig. 11b",
-                        "Raw data increases every temporal network's error significantly");
+    Claim& c =
+        AddClaim(w, "Fig. 11b", "Raw data increases every temporal network's error significantly");
     for (const std::string& t : temporal)
       c.comparisons.push_back(
           Compare(t + ": pre-processed below raw", t_pre.at(t).at("all"), t_raw.at(t).at("all")));
@@ -1043,8 +1052,8 @@ std::vector<std::string> WriteReproduceReport(const ReproduceReportInputs& in) {
     Decide(c);
   }
   {
-    Claim& c = AddClaim(w, "Fig. 11b",
-                        "Without pre-processing the temporal networks' differences shrink");
+    Claim& c =
+        AddClaim(w, "Fig. 11b", "Without pre-processing the temporal networks' differences shrink");
     const auto spread = [&](const std::map<std::string, std::map<std::string, Seeds>>& v) {
       Seeds out(static_cast<std::size_t>(plan.seeds), kNaN);
       for (std::size_t s = 0; s < out.size(); ++s) {
@@ -1057,8 +1066,8 @@ std::vector<std::string> WriteReproduceReport(const ReproduceReportInputs& in) {
       }
       return out;
     };
-    c.comparisons.push_back(Compare("spread raw below spread pre-processed", spread(t_raw),
-                                    spread(t_pre)));
+    c.comparisons.push_back(
+        Compare("spread raw below spread pre-processed", spread(t_raw), spread(t_pre)));
     c.ours = "spread (max - min, all modalities): pre-processed " +
              MeanCi(Summarise(spread(t_pre))) + " m, raw " + MeanCi(Summarise(spread(t_raw))) +
              " m";
@@ -1067,8 +1076,9 @@ std::vector<std::string> WriteReproduceReport(const ReproduceReportInputs& in) {
 
   // Fig. 12.
   doc.Heading("Fig. 12: time alignment");
-  doc.Text("All four trained without random modality dropout, as the paper says for this "
-           "comparison (TE-Align here is the `te_align` variant, not the default `paper` model).");
+  doc.Text(
+      "All four trained without random modality dropout, as the paper says for this "
+      "comparison (TE-Align here is the `te_align` variant, not the default `paper` model).");
   const auto align = SubsetFigure(w, arms, "fig12_alignment", "Fig. 12: time alignment",
                                   {{"TE-Align", "te_align"},
                                    {"first", "resample_first"},
@@ -1094,8 +1104,8 @@ std::vector<std::string> WriteReproduceReport(const ReproduceReportInputs& in) {
                                     {"MICA", "no_madw"},
                                     {"neither", "no_madw_mica"}});
   {
-    Claim& c = AddClaim(w, "Fig. 13",
-                        "In most cases the best performance is with both MADW and MICA");
+    Claim& c =
+        AddClaim(w, "Fig. 13", "In most cases the best performance is with both MADW and MICA");
     c.most = true;
     for (const char* o : {"MADW", "MICA", "neither"})
       for (const std::string& s : Subsets())
@@ -1173,19 +1183,22 @@ std::vector<std::string> WriteReproduceReport(const ReproduceReportInputs& in) {
     return s;
   };
   for (const Claim& c : w.claims) {
-    rows.push_back({c.artefact, c.paper, c.ours, c.verdict + (c.detail.empty() ? "" : ": " + c.detail),
+    rows.push_back({c.artefact, c.paper, c.ours,
+                    c.verdict + (c.detail.empty() ? "" : ": " + c.detail),
                     c.frame_verdict.empty() ? "-" : c.frame_verdict});
     holds += c.verdict == "holds";
     fails += c.verdict == "does not hold";
     mixed += c.verdict == "mixed";
-    const std::string head = clean(c.artefact) + "," + clean(c.paper) + "," + clean(c.ours) +
-                             "," + c.verdict + "," + clean(c.detail) + "," +
-                             clean(c.frame_verdict) + ",";
+    const std::string head = clean(c.artefact) + "," + clean(c.paper) + "," + clean(c.ours) + "," +
+                             c.verdict + "," + clean(c.detail) + "," + clean(c.frame_verdict) + ",";
     if (c.comparisons.empty()) csv << head << ",,,,\n";
     for (const Comparison& cmp : c.comparisons)
       csv << head << clean(cmp.what) << "," << Fixed(cmp.diff.mean, 6) << ","
           << Fixed(cmp.diff.ci95, 6) << "," << cmp.diff.n << ","
-          << (cmp.sign > 0 ? "holds" : cmp.sign < 0 ? "reversed" : "within noise") << "\n";
+          << (cmp.sign > 0   ? "holds"
+              : cmp.sign < 0 ? "reversed"
+                             : "within noise")
+          << "\n";
   }
   w.Csv("claims.csv", csv.str());
   summary.push_back({Block::kText,
@@ -1200,8 +1213,8 @@ std::vector<std::string> WriteReproduceReport(const ReproduceReportInputs& in) {
   doc.blocks.insert(doc.blocks.begin() + static_cast<std::ptrdiff_t>(summary_at), summary.begin(),
                     summary.end());
 
-  const std::string title = "The paper's Sec. VI in simulation: " + base.name +
-                            (in.quick ? " (quick, toy size)" : "");
+  const std::string title =
+      "The paper's Sec. VI in simulation: " + base.name + (in.quick ? " (quick, toy size)" : "");
   core::WriteFileAtomic((fs::path(in.dir) / "report.md").string(), RenderMarkdown(title, doc));
   core::WriteFileAtomic((fs::path(in.dir) / "report.html").string(), RenderHtml(title, doc));
   return w.warnings;

@@ -31,6 +31,7 @@
 #pragma once
 
 #include <cstddef>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -45,9 +46,31 @@ struct ReproduceReportInputs {
   const ReproducePlan* plan = nullptr;
   bool quick = false;
   std::string command_line;
-  double wall_s = 0.0;         // this invocation's
+  double wall_s = 0.0;          // this invocation's
   std::size_t trained_now = 0;  // trainings this invocation ran
 };
+
+// The statistics of the verdicts (the report's rules above).
+struct SeedStat {
+  double mean = std::numeric_limits<double>::quiet_NaN();
+  double ci95 = std::numeric_limits<double>::quiet_NaN();  // half-width; NaN for n < 2
+  int n = 0;                                               // finite values
+};
+// Mean and Student-t 95 % half-width of the finite values (NaN: missing).
+SeedStat SummariseSeeds(const std::vector<double>& values);
+
+struct SeedComparison {
+  std::string what;
+  SeedStat diff;  // worse - better per seed (where both are finite)
+  int sign = 0;   // +1 holds, -1 reversed, 0 within noise or no data
+};
+// "better below worse", seed by seed (index: seed - 1).
+SeedComparison CompareSeeds(const std::string& what, const std::vector<double>& better,
+                            const std::vector<double>& worse);
+// "holds", "does not hold", "mixed" ("not measured" without comparisons);
+// `detail` (if not null) says how many comparisons hold.
+std::string ClaimVerdict(const std::vector<SeedComparison>& comparisons, bool most,
+                         std::string* detail);
 
 // Writes every artefact and the reports. Returns warnings (a figure not
 // drawn: gnuplot missing, ...). Throws std::runtime_error when a training's

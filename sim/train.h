@@ -166,8 +166,8 @@ struct TrainCommand {
   // paper for gru, raw for raw_gru); core::UsageError naming it else.
   std::string encoders_dir;
   bool score_classical = true;  // the classical methods in the report (replays the test episodes)
-  bool paper_head = true;     // train the paper's linear edge head (uavloc)
-  bool anchored_head = true;  // train our anchored edge head (uavloc_anchored)
+  bool paper_head = true;       // train the paper's linear edge head (uavloc)
+  bool anchored_head = true;    // train our anchored edge head (uavloc_anchored)
   pipeline::DataSplit split = pipeline::DataSplit::kTrajectory;
   // Train on the first N episodes of the training part only (0: all); the
   // validation and test parts stay whole (learning curves on one test set).

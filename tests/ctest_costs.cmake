@@ -7,6 +7,7 @@
 # (Tests added in CMakeLists.txt itself are defined after this file runs:
 # they get their COST there.)
 foreach(entry
+    "CLI: reproduce --quick writes every artefact with its verdicts, keeps finished trainings on SIGTERM and resumes=330"
     "CLI: train --quick learns, is deterministic, and its model runs in the loop=300"
     "The default model: three modalities beat each single one on held-out trajectories=115"
     "CLI: train --jobs 2 and mpirun simulate the episodes one job does, byte for byte, and extend a saved set exactly=150"

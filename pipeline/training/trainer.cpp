@@ -7,8 +7,8 @@
 #include <fstream>
 #include <limits>
 #include <optional>
-#include <stdexcept>
 #include <sstream>
+#include <stdexcept>
 
 #include "pipeline/edge/te_align.h"
 #include "pipeline/edge/uavloc_model.h"

@@ -16,6 +16,7 @@ using uavsim::channel::BeamGain;
 using uavsim::channel::DftCodebook;
 using uavsim::channel::DownlinkScorer;
 using uavsim::channel::FreeSpace;
+using uavsim::channel::LosSteeredGain;
 using uavsim::channel::PathModel;
 using uavsim::channel::RateSnrAccumulator;
 using uavsim::channel::SteeredBeam;
@@ -193,4 +194,38 @@ TEST_CASE("DownlinkScorer: one window scores every beam on one channel", "[chann
                   std::invalid_argument);
   CHECK_THROWS_AS(DownlinkScorer(bs, 0.0, {"ekf", "ekf"}, {0.0}, uavsim::core::RngStream(1, "d")),
                   std::invalid_argument);
+}
+
+TEST_CASE("LosSteeredGain: the Dirichlet kernels of the direction error, Mx My on target",
+          "[channel]") {
+  // A zenith-facing 32 x 32 lambda/2 UPA: x_A = world +y, y_A = world -x
+  // (channel/base_station_config.h), so a world direction u has array
+  // coordinates (u_y, -u_x, u_z). With f = a(u_e) / sqrt(N) and h = a(u_t):
+  //   |h^H f|^2 = |D_Mx(pi d dx)|^2 |D_My(pi d dy)|^2 / N,
+  //   D_M(x) = sin(M x) / sin(x), dx, dy the array-coordinate differences.
+  BaseStationConfig c = LosOnly();
+  c.upa.mx = 32;
+  c.upa.my = 32;
+  const Upa upa = Upa::FromConfig(c);
+  const Eigen::Vector3d bs = c.position_m;
+  const auto dirichlet = [](int m, double x) {
+    return std::abs(std::sin(x)) < 1e-12 ? m : std::sin(m * x) / std::sin(x);
+  };
+  const auto closed_form = [&](const Eigen::Vector3d& est, const Eigen::Vector3d& truth) {
+    const Eigen::Vector3d ue = (est - bs).normalized(), ut = (truth - bs).normalized();
+    const double dx = ue.y() - ut.y(), dy = -ue.x() + ut.x();
+    const double ax = dirichlet(32, kPi * 0.5 * dx), ay = dirichlet(32, kPi * 0.5 * dy);
+    return ax * ax * ay * ay / 1024.0;
+  };
+  const Eigen::Vector3d truth(30.0, -20.0, 60.0);
+  CHECK(LosSteeredGain(upa, bs, truth, truth) == Approx(1024.0).epsilon(1e-9));
+  // Along the ray: the same direction, the same gain.
+  CHECK(LosSteeredGain(upa, bs, bs + 2.0 * (truth - bs), truth) == Approx(1024.0).epsilon(1e-9));
+  for (const Eigen::Vector3d& error : {Eigen::Vector3d(0.5, 0.0, 0.0), Eigen::Vector3d(0, 2, 0),
+                                       Eigen::Vector3d(3, -4, 1), Eigen::Vector3d(-9, 7, -2)}) {
+    INFO("error " << error.transpose());
+    const double g = LosSteeredGain(upa, bs, truth + error, truth);
+    CHECK(g == Approx(closed_form(truth + error, truth)).epsilon(1e-9).margin(1e-9));
+    CHECK(g < 1024.0);
+  }
 }

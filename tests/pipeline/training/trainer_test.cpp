@@ -773,11 +773,28 @@ TEST_CASE("Trainer: every variant trains on shared stage-1 encoders and lowers i
 TEST_CASE("Variants: names, figures and keys are the issue's contract", "[pipeline]") {
   std::vector<std::string> names;
   for (const Variant& v : Variants()) names.push_back(v.name);
-  CHECK(names == std::vector<std::string>{
-                     "paper", "gru", "lstm", "tcn", "te_align", "resample_first", "resample_middle",
-                     "resample_random", "no_madw", "no_mica", "no_madw_mica", "early_fusion",
-                     "late_fusion", "modality_dropout", "hemis", "mlp_bottleneck", "raw",
-                     "raw_camera", "raw_lidar_radar", "raw_gru", "raw_lstm", "raw_tcn"});
+  CHECK(names == std::vector<std::string>{"paper",
+                                          "gru",
+                                          "lstm",
+                                          "tcn",
+                                          "te_align",
+                                          "resample_first",
+                                          "resample_middle",
+                                          "resample_random",
+                                          "no_madw",
+                                          "no_mica",
+                                          "no_madw_mica",
+                                          "early_fusion",
+                                          "late_fusion",
+                                          "modality_dropout",
+                                          "hemis",
+                                          "mlp_bottleneck",
+                                          "raw",
+                                          "raw_camera",
+                                          "raw_lidar_radar",
+                                          "raw_gru",
+                                          "raw_lstm",
+                                          "raw_tcn"});
   const TrainingConfig d;
   const auto get = [&](const char* name) { return ApplyVariant(*FindVariant(name), d); };
   CHECK(TrainingConfigJson(get("paper")) == TrainingConfigJson(d));
