@@ -33,23 +33,15 @@ using core::Json;
 
 constexpr const char* kFormat = "uavsim-reproduce/1";
 
-// The stage-2 variants on the paper arm's encoders (Figs. 11a-14).
-constexpr const char* kOnPaperEncoders[] = {"gru",
-                                            "lstm",
-                                            "tcn",
-                                            "te_align",
-                                            "resample_first",
-                                            "resample_middle",
-                                            "resample_random",
-                                            "no_madw",
-                                            "no_mica",
-                                            "no_madw_mica",
-                                            "early_fusion",
-                                            "late_fusion",
-                                            "modality_dropout",
-                                            "hemis"};
-// And on the raw arm's (Fig. 11b).
-constexpr const char* kOnRawEncoders[] = {"raw_gru", "raw_lstm", "raw_tcn"};
+// The variants other than `base` whose nodes send what base's do: trained
+// on base's encoders, stage 2 only (paper: Figs. 11a-14; raw: Fig. 11b).
+std::vector<std::string> OnEncodersOf(const std::string& base) {
+  std::vector<std::string> out;
+  const pipeline::Variant& b = *pipeline::FindVariant(base);
+  for (const pipeline::Variant& v : pipeline::Variants())
+    if (v.name != base && pipeline::SameNodes(v, b)) out.push_back(v.name);
+  return out;
+}
 
 std::string ArmId(const std::string& variant, int z, std::uint64_t seed, bool frame = false) {
   return variant + "-z" + std::to_string(z) + "-s" + std::to_string(seed) + (frame ? "-frame" : "");
@@ -259,8 +251,8 @@ ReproducePlan MakeReproducePlan(const Scenario& base, const ReproduceOptions& o)
   }
   for (int s = 1; s <= plan.seeds; ++s) {
     const auto seed = static_cast<std::uint64_t>(s);
-    for (const char* v : kOnPaperEncoders) arm(v, z0, seed, ArmId("paper", z0, seed), true);
-    for (const char* v : kOnRawEncoders) arm(v, z0, seed, ArmId("raw", z0, seed), true);
+    for (const char* base : {"paper", "raw"})
+      for (const std::string& v : OnEncodersOf(base)) arm(v, z0, seed, ArmId(base, z0, seed), true);
   }
   return plan;
 }

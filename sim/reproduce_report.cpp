@@ -308,10 +308,11 @@ struct Bar {
   Stat value;
 };
 
+// name.csv, and its bars in `png` ("": name.png).
 void WriteBars(Writer& w, const std::string& name, const std::string& category_column,
                const std::string& value_column, const std::vector<Bar>& bars,
                const std::string& title, const std::string& y_label, bool log_y,
-               const std::string& x_label) {
+               const std::string& x_label, const std::string& png = "") {
   std::ostringstream csv;
   csv << category_column << ",series," << value_column << ",ci95,seeds\n";
   for (const Bar& b : bars)
@@ -327,7 +328,9 @@ void WriteBars(Writer& w, const std::string& name, const std::string& category_c
   spec.y_column = value_column;
   spec.ci95_column = "ci95";
   spec.log_y = log_y;
-  w.Warn(name + ".png", results::PlotBars((fs::path(w.dir) / (name + ".csv")).string(), spec));
+  const std::string png_name = png.empty() ? name + ".png" : png;
+  spec.png_path = (fs::path(w.dir) / png_name).string();
+  w.Warn(png_name, results::PlotBars((fs::path(w.dir) / (name + ".csv")).string(), spec));
 }
 
 // A table of subsets x series ("mean ± ci" cells) for the report.
@@ -561,23 +564,9 @@ void DataRateTable(Writer& w, const ReproducePlan& plan) {
   }
   w.Csv("table2_data_rates.csv", csv.str());
   // The bars of our rates (a logarithmic axis: five orders of magnitude).
-  {
-    std::ostringstream b;
-    b << "modality,series,kBps,ci95,seeds\n";
-    for (const Bar& bar : bars)
-      b << bar.category << "," << bar.series << "," << Fixed(bar.value.mean, 6) << ",,1\n";
-    w.Csv("table2_data_rates_bars.csv", b.str());
-    results::BarPlotSpec spec;
-    spec.title = "Table II: data rate per node, uavsim";
-    spec.x_label = "modality";
-    spec.y_label = "KB/s (1 KB = 1000 bytes)";
-    spec.category_column = "modality";
-    spec.y_column = "kBps";
-    spec.log_y = true;
-    spec.png_path = (fs::path(w.dir) / "table2_data_rates.png").string();
-    w.Warn("table2_data_rates.png",
-           results::PlotBars((fs::path(w.dir) / "table2_data_rates_bars.csv").string(), spec));
-  }
+  WriteBars(w, "table2_data_rates_bars", "modality", "kBps", bars,
+            "Table II: data rate per node, uavsim", "KB/s (1 KB = 1000 bytes)", true, "modality",
+            "table2_data_rates.png");
   w.doc.Text(
       "One run of the scenario per z (" + core::FormatNumber(plan.rate_run_s) +
       " simulated s, nodes pre-processing, every frame's bytes counted): original = the sensor's "
@@ -651,23 +640,9 @@ void FlopsTable(Writer& w) {
     if (r.module.rfind("point cloud encoder, LiDAR", 0) == 0) cloud_ratio = ratio;
   }
   w.Csv("table3_flops.csv", csv.str());
-  {
-    std::ostringstream b;
-    b << "module,series,mflops,ci95,seeds\n";
-    for (const Bar& bar : bars)
-      b << bar.category << "," << bar.series << "," << Fixed(bar.value.mean, 6) << ",,1\n";
-    w.Csv("table3_flops_bars.csv", b.str());
-    results::BarPlotSpec spec;
-    spec.title = "Table III: MFLOPs per frame, uavsim beside the paper";
-    spec.x_label = "module";
-    spec.y_label = "MFLOPs per frame";
-    spec.category_column = "module";
-    spec.y_column = "mflops";
-    spec.log_y = true;
-    spec.png_path = (fs::path(w.dir) / "table3_flops.png").string();
-    w.Warn("table3_flops.png",
-           results::PlotBars((fs::path(w.dir) / "table3_flops_bars.csv").string(), spec));
-  }
+  WriteBars(w, "table3_flops_bars", "module", "mflops", bars,
+            "Table III: MFLOPs per frame, uavsim beside the paper", "MFLOPs per frame", true,
+            "module", "table3_flops.png");
   w.doc.Text(
       "`uavsim bench flops`: encoders counted from the layers' shapes at the paper's sizes (two "
       "128 x 128 crops, 1024 points, z = 16; 2 FLOPs per multiply-add), pre-processing as "
@@ -1002,10 +977,7 @@ std::vector<std::string> WriteReproduceReport(const ReproduceReportInputs& in) {
     w.Csv("table4_camera_preprocessing.csv", csv.str());
     WriteBars(w, "table4_camera_preprocessing_bars", "preprocessing_applied_to", "rmse_m", bars,
               "Table IV: RMSE by which nodes pre-process", "RMSE, all modalities (m)", true,
-              "pre-processing applied to");
-    std::error_code ec;
-    fs::rename(fs::path(w.dir) / "table4_camera_preprocessing_bars.png",
-               fs::path(w.dir) / "table4_camera_preprocessing.png", ec);
+              "pre-processing applied to", "table4_camera_preprocessing.png");
     doc.Image("table4_camera_preprocessing.png",
               "Table IV: RMSE by which nodes pre-process (log scale; the paper's on MMAUD)");
     doc.Table(table);
