@@ -139,16 +139,16 @@ void RunDataRates(const Scenario& base, const ReproducePlan& plan, const std::st
 }
 
 // DIR/invocations.csv gets a row per invocation that got past the
-// episodes: when it started, its wall time, what it trained.
+// episodes: when it started, its wall time, what it trained, how it ended
+// (reported, failed, interrupted; a SIGKILL leaves no row).
 void LogInvocation(const std::string& dir, const std::string& started_utc, double wall_s, int jobs,
-                   std::size_t trained, std::size_t failed) {
+                   std::size_t trained, const std::string& ended) {
   const std::string file = (fs::path(dir) / "invocations.csv").string();
   std::error_code ec;
   std::string text = fs::is_regular_file(file, ec) ? core::ReadFileBytes(file)
-                                                   : "started_utc,wall_s,jobs,trained,failed\n";
+                                                   : "started_utc,wall_s,jobs,trained,ended\n";
   text += started_utc + "," + core::FormatNumber(std::round(wall_s * 10.0) / 10.0) + "," +
-          std::to_string(jobs) + "," + std::to_string(trained) + "," + std::to_string(failed) +
-          "\n";
+          std::to_string(jobs) + "," + std::to_string(trained) + "," + ended + "\n";
   core::WriteFileAtomic(file, text);
 }
 
@@ -308,7 +308,8 @@ ReproduceOutcome RunReproduce(const Scenario& base, const ReproduceOptions& o) {
   const auto episodes_of = [&](const std::string& set) -> const std::vector<pipeline::Episode>& {
     auto it = sets.find(set);
     if (it == sets.end())  // a rank other than 0: from DIR (a shared file system)
-      it = sets.emplace(set, pipeline::ReadEpisodes(SetFile(dir, set))).first;
+      it = sets.emplace(set, pipeline::ReadEpisodes(SetFile(dir, set), core::ThrowIfInterrupted))
+               .first;
     return it->second;
   };
   ProcessFarm farm;
@@ -350,6 +351,9 @@ ReproduceOutcome RunReproduce(const Scenario& base, const ReproduceOptions& o) {
     out.ran += c.ran;
     out.failed += c.failed;
   };
+  const auto wall = [&] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  };
   try {
     // Two rounds: the arms that train stage 1, then those that reuse them.
     for (const bool reuse : {false, true}) {
@@ -377,6 +381,7 @@ ReproduceOutcome RunReproduce(const Scenario& base, const ReproduceOptions& o) {
       }
     }
   } catch (const core::Interrupted&) {
+    if (coordinator) LogInvocation(dir, started_utc, wall(), o.jobs, out.ran, "interrupted");
     if (world) {
       std::cerr << "uavsim: interrupted; finished trainings are kept\n";
       world->abort(130);
@@ -390,26 +395,22 @@ ReproduceOutcome RunReproduce(const Scenario& base, const ReproduceOptions& o) {
   std::size_t missing = 0;
   for (const ReproduceArm& a : plan.arms) missing += !ArmDone(dir, a.id);
   out.failed = std::max(out.failed, missing);
-  const auto wall = [&] {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-  };
   if (out.failed > 0) {
     out.wall_s = wall();
-    LogInvocation(dir, started_utc, out.wall_s, o.jobs, out.ran, out.failed);
+    LogInvocation(dir, started_utc, out.wall_s, o.jobs, out.ran, "failed");
     return out;
   }
 
   // 3. Tab. II's runs, then every artefact and the report.
   RunDataRates(base, plan, dir, o.quiet);
   out.wall_s = wall();
-  LogInvocation(dir, started_utc, out.wall_s, o.jobs, out.ran, 0);
+  LogInvocation(dir, started_utc, out.wall_s, o.jobs, out.ran, "reported");
   ReproduceReportInputs in;
   in.dir = dir;
   in.scenario = &base;
   in.plan = &plan;
   in.quick = o.quick;
   in.command_line = o.command_line;
-  in.wall_s = out.wall_s;
   in.trained_now = out.ran;
   out.warnings = WriteReproduceReport(in);
   out.reported = true;

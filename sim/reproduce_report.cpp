@@ -885,12 +885,25 @@ std::vector<std::string> WriteReproduceReport(const ReproduceReportInputs& in) {
       "methods seed by seed on the same held-out flights: a comparison holds when the "
       "interval of the difference lies on the paper's side of 0, is reversed when on the "
       "other, else is within noise.");
+  // Wall time over every invocation that got past the episodes.
+  double total_wall_s = 0.0;
+  std::size_t invocations = 0;
+  {
+    results::CsvFile log;
+    if (results::ReadCsvFile((fs::path(in.dir) / "invocations.csv").string(), &log).empty()) {
+      const long c = log.Column("wall_s");
+      for (const auto& row : log.rows)
+        if (c >= 0) total_wall_s += std::stod(row[static_cast<std::size_t>(c)]), ++invocations;
+    }
+  }
   doc.Text("Trainings: " + std::to_string(arms.count()) + " (" + std::to_string(in.trained_now) +
            " by this invocation), " +
            core::FormatNumber(std::round(arms.TrainingSeconds() / 60.0)) +
-           " CPU-minutes of training in all; this invocation's wall time " +
-           core::FormatNumber(std::round(in.wall_s / 6.0) / 10.0) +
-           " min (every invocation: invocations.csv).");
+           " CPU-minutes in the training stages; wall time " +
+           core::FormatNumber(std::round(total_wall_s / 6.0) / 10.0) + " min over " +
+           std::to_string(invocations) +
+           " invocation(s), each in invocations.csv (episodes simulated by an interrupted "
+           "invocation are not counted there).");
   const std::size_t summary_at = doc.blocks.size();
 
   DecoderFigures(w, arms, plan);

@@ -46,7 +46,6 @@ struct ReproduceReportInputs {
   const ReproducePlan* plan = nullptr;
   bool quick = false;
   std::string command_line;
-  double wall_s = 0.0;          // this invocation's
   std::size_t trained_now = 0;  // trainings this invocation ran
 };
 

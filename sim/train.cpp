@@ -270,7 +270,7 @@ SavedEpisodes ReadSavedEpisodes(const Scenario& base, const EpisodePlan& plan, i
                                 bool keep_length, const std::string& file,
                                 const std::string& command) {
   SavedEpisodes saved;
-  saved.episodes = pipeline::ReadEpisodes(file);
+  saved.episodes = pipeline::ReadEpisodes(file, core::ThrowIfInterrupted);
   std::vector<pipeline::Episode>& held = saved.episodes;
   // What the nodes sent must be what this scenario's nodes send (a file of
   // pre-processed observations cannot train the raw variant, nor the

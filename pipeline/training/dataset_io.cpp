@@ -217,7 +217,8 @@ std::string WeatherOf(const Episode& e) {
   return rain && fog ? "rain+fog" : rain ? "rain" : fog ? "fog" : "clear";
 }
 
-std::vector<Episode> ReadEpisodes(const std::string& path) {
+std::vector<Episode> ReadEpisodes(const std::string& path,
+                                  const std::function<void()>& check_stop) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::runtime_error(path + ": cannot open");
   std::error_code ec;
@@ -231,6 +232,7 @@ std::vector<Episode> ReadEpisodes(const std::string& path) {
     r.Fail("not an episode file");
   std::vector<Episode> episodes(r.Count(8));
   for (Episode& e : episodes) {
+    if (check_stop) check_stop();
     e.label = r.String();
     e.window_s = r.Pod<double>();
     e.raw_modalities = v01 ? Episode::kRawUnknown : r.Pod<std::uint8_t>();

@@ -25,6 +25,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -46,6 +47,9 @@ std::vector<float> GreyFloats(const std::uint8_t* bytes, std::size_t n);
 void WriteEpisodes(const std::vector<Episode>& episodes, const std::string& path);
 // Throws std::runtime_error naming the path for a missing, truncated or
 // foreign file.
-std::vector<Episode> ReadEpisodes(const std::string& path);
+// `check_stop` (if set) is called before each episode and may throw (a
+// termination signal while a large file is read).
+std::vector<Episode> ReadEpisodes(const std::string& path,
+                                  const std::function<void()>& check_stop = {});
 
 }  // namespace uavsim::pipeline

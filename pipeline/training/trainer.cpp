@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <optional>
 #include <sstream>
@@ -183,6 +184,23 @@ IbInput MakeInput(const std::vector<const Sample*>& batch, Modality m, const IbN
   return MakePointInput(obs, m, n);
 }
 
+// TrainOptions::check_stop of the TrainUavLoc call under way on this
+// thread, polled by the long loops between optimisation steps too
+// (validation passes, encoding, scoring: on raw data each can run for
+// minutes), so a termination signal is honoured promptly (issue 24).
+thread_local const std::function<void()>* g_check_stop = nullptr;
+
+void PollStop() {
+  if (g_check_stop && *g_check_stop) (*g_check_stop)();
+}
+
+struct StopScope {
+  explicit StopScope(const std::function<void()>& f) { g_check_stop = &f; }
+  ~StopScope() { g_check_stop = nullptr; }
+  StopScope(const StopScope&) = delete;
+  StopScope& operator=(const StopScope&) = delete;
+};
+
 torch::Tensor MakeTarget(const std::vector<const Sample*>& batch, const IbNormalization& n) {
   std::vector<Eigen::Vector3d> truth;
   for (const Sample* s : batch) truth.push_back(s->truth_m);
@@ -197,6 +215,7 @@ double IbValidationLoss(IbCcModel& model, const std::vector<const Sample*>& samp
   const IbNormalization& n = model->config().normalization;
   double sum = 0.0;
   for (std::size_t i = 0; i < samples.size(); i += static_cast<std::size_t>(batch)) {
+    PollStop();
     const std::vector<const Sample*> b(
         samples.begin() + static_cast<std::ptrdiff_t>(i),
         samples.begin() + static_cast<std::ptrdiff_t>(
@@ -308,6 +327,7 @@ std::vector<std::vector<std::vector<float>>> EncodeEpisodes(const std::vector<Ep
       for (std::size_t i = 0; i < samples.size(); ++i)
         if (static_cast<int>(samples[i].modality) == m) index.push_back(i);
       for (std::size_t i = 0; i < index.size(); i += 64) {
+        PollStop();
         std::vector<const Sample*> batch;
         for (std::size_t j = i; j < std::min(index.size(), i + 64); ++j)
           batch.push_back(&samples[index[j]]);
@@ -457,6 +477,7 @@ double FusionValidationLoss(UavLocModel& model, const std::vector<WindowSequence
   model->eval();
   double sum = 0.0, count = 0.0;
   for (const WindowSequence& s : val) {
+    PollStop();
     const torch::Tensor mask = s.mask.unsqueeze(0);
     const torch::Tensor y_hat = ForwardSequence(model, s, s.mask);
     const torch::Tensor w = CountedWindows(mask, s.scored.unsqueeze(0));
@@ -586,6 +607,7 @@ Evaluation Evaluate(UavLocModel& model, const std::vector<WindowSequence>& seque
     const std::string key = ModalitySubsetName(bits);
     double sum = 0.0, count = 0.0;
     for (const WindowSequence& s : sequences) {
+      PollStop();
       torch::Tensor keep = torch::zeros({1, kModalityCount});
       for (int m = 0; m < kModalityCount; ++m)
         if (bits & (1 << m)) keep[0][m] = 1.0;
@@ -638,6 +660,7 @@ std::map<std::string, DecoderScore> DecoderScores(std::vector<IbCcModel>& encode
     const std::vector<const Sample*> samples = SamplesOf(episodes, static_cast<Modality>(m), align);
     double sum = 0.0;
     for (std::size_t i = 0; i < samples.size(); i += 64) {
+      PollStop();
       const std::vector<const Sample*> b(
           samples.begin() + static_cast<std::ptrdiff_t>(i),
           samples.begin() + static_cast<std::ptrdiff_t>(std::min(samples.size(), i + 64)));
@@ -781,6 +804,7 @@ void WriteTestEstimates(const TrainReport& r, const std::string& path) {
 TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& o, const ModelManifest& manifest,
                         const std::string& out_dir) {
   o.Validate();
+  const StopScope stop(o.check_stop);
   if (data.train.empty() || data.validation.empty())
     throw std::invalid_argument("train: need at least one training and one validation episode");
   for (const auto* part : {&data.train, &data.validation, &data.test})

@@ -85,8 +85,9 @@ struct TrainOptions : TrainingConfig {
   // the encoders' position normalisation. Their latent size must be
   // latent_dim. Empty: train stage 1.
   std::string encoders_from;
-  // Called before every optimisation step; may throw to stop training
-  // (the CLI's Ctrl-C). Empty: never stops.
+  // Called before every optimisation step and every batch or sequence of
+  // the passes between them (validation, encoding, scoring); may throw to
+  // stop training (the CLI's Ctrl-C). Empty: never stops.
   std::function<void()> check_stop;
   // Scores methods that need no training (the caller's classical ones: the
   // trainer knows no sensors) on held-out episodes, by method name, under

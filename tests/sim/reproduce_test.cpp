@@ -292,6 +292,17 @@ TEST_CASE(
     CHECK(ReadFile(out + "/" + a + ".csv") == text);
   }
 
+  // Every invocation's wall time, and how it ended.
+  const auto log = CsvRows(out + "/invocations.csv");
+  REQUIRE(log.size() == 4);
+  CHECK(log[0] == std::vector<std::string>{"started_utc", "wall_s", "jobs", "trained", "ended"});
+  CHECK(log[1][4] == "interrupted");
+  CHECK(log[2][4] == "reported");
+  CHECK(log[2][3] == std::to_string(58 - kept));
+  CHECK(log[3][3] == "0");
+  CHECK(md.find("over 2 invocation(s)") != std::string::npos);  // read before the third
+  CHECK(ReadFile(out + "/report.md").find("over 3 invocation(s)") != std::string::npos);
+
   // Another plan into the same folder is refused.
   const auto other =
       RunCli({"reproduce", "--scenario", kDefault, "--quick", "--episodes", "7", "--out", out});

@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <map>
 #include <random>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -490,12 +491,27 @@ TEST_CASE("Trainer: refuses a data set without training or validation episodes",
                   std::invalid_argument);
   CHECK_FALSE(fs::exists(root + "/a"));
   CHECK_FALSE(fs::exists(root + "/b"));
-  // No edge head to train.
-  TrainOptions none = Tiny();
-  none.paper_head = none.anchored_head = false;
-  CHECK_THROWS_AS(TrainUavLoc(Synthetic(), none, SomeManifest(), root + "/c"),
-                  std::invalid_argument);
-  CHECK_FALSE(fs::exists(root + "/c"));
+}
+
+TEST_CASE("Trainer: no edge head trains stage 1 alone, its decoders scored", "[pipeline]") {
+  // `uavsim train --head none` (Figs. 7-9 at every latent size).
+  const std::string dir = testing::TempDir("trainer-stage1") + "/m";
+  TrainOptions o = Tiny();
+  o.paper_head = o.anchored_head = false;
+  InitTorch(1, kSeed);
+  const TrainReport r = TrainUavLoc(Synthetic(), o, SomeManifest(), dir);
+  REQUIRE(r.stages.size() == 3);
+  for (const StageReport& st : r.stages) CHECK(st.name != "fusion");
+  CHECK(r.test.empty());
+  REQUIRE(r.test_decoder.size() == 3);
+  for (const auto& [modality, d] : r.test_decoder) CHECK(std::isfinite(d.rmse_m));
+  const ModelManifest m = ReadModelManifest(dir + "/model.json");
+  CHECK(m.edge.empty());
+  CHECK(m.anchored_edge.empty());
+  CHECK_FALSE(fs::exists(dir + "/uavloc.pt"));
+  // No head, no estimates: the header alone.
+  CHECK(testing::ReadFile(dir + "/test_estimates.csv") ==
+        "method,subset,episode,window,x_m,y_m,z_m,true_x_m,true_y_m,true_z_m\n");
 }
 
 TEST_CASE("EdgeLocalizer: the trained model rides out windows with every modality missing",
@@ -733,6 +749,28 @@ TEST_CASE("Trainer: every variant trains on shared stage-1 encoders and lowers i
   InitTorch(1, kSeed);
   const TrainReport first = TrainUavLoc(Synthetic(), base, SomeManifest(), root + "/paper");
   REQUIRE(first.stages.size() == 4);
+  {
+    // test_estimates.csv: each counted window's estimate and truth; the
+    // RMSE recomputed from them is the report's.
+    std::istringstream csv(testing::ReadFile(root + "/paper/test_estimates.csv"));
+    std::string line;
+    std::getline(csv, line);
+    CHECK(line == "method,subset,episode,window,x_m,y_m,z_m,true_x_m,true_y_m,true_z_m");
+    double sum = 0.0;
+    std::size_t n = 0;
+    while (std::getline(csv, line)) {
+      std::vector<std::string> c;
+      std::istringstream cells(line);
+      for (std::string cell; std::getline(cells, cell, ',');) c.push_back(cell);
+      REQUIRE(c.size() == 10);
+      if (c[0] != "uavloc" || c[1] != "all") continue;
+      for (int k = 0; k < 3; ++k) sum += std::pow(std::stod(c[4 + k]) - std::stod(c[7 + k]), 2);
+      ++n;
+    }
+    CHECK(n == first.test.at("uavloc").windows.at("all"));
+    REQUIRE(n > 0);
+    CHECK(std::sqrt(sum / n) == Approx(first.test.at("uavloc").rmse_m.at("all")).epsilon(1e-4));
+  }
   int trained = 0;
   for (const Variant& v : Variants()) {
     if (!SameNodes(v, *FindVariant("paper")) || std::string(v.name) == "paper") continue;
