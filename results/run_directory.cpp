@@ -54,6 +54,25 @@ std::size_t RemoveStaleStaging(const std::string& final_dir) {
   return removed;
 }
 
+std::size_t RemoveStaleTemporaries(const std::string& folder) {
+  std::size_t removed = 0;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(folder, ec)) {
+    const std::string name = e.path().filename().string();
+    const auto at = name.rfind(".tmp-");
+    if (at == std::string::npos || at == 0) continue;
+    const std::string digits = name.substr(at + 5);
+    if (digits.empty() || digits.size() > 9 ||
+        digits.find_first_not_of("0123456789") != std::string::npos)
+      continue;
+    const auto pid = static_cast<pid_t>(std::stol(digits));
+    if (pid == ::getpid() || ProcessAlive(pid) || !e.is_regular_file(ec)) continue;
+    std::error_code rm;
+    if (fs::remove(e.path(), rm) && !rm) ++removed;
+  }
+  return removed;
+}
+
 RunDirectory::RunDirectory(std::string final_dir, bool force)
     : final_dir_(std::move(final_dir)), force_(force) {
   while (final_dir_.size() > 1 && final_dir_.back() == '/') final_dir_.pop_back();

@@ -32,6 +32,11 @@ std::optional<pid_t> StagingOwner(const std::string& folder_name, std::string* f
 // killed with SIGKILL left. Returns how many.
 std::size_t RemoveStaleStaging(const std::string& final_dir);
 
+// Removes the files "<name>.tmp-PID" and ".<name>.tmp-PID" in `folder`
+// (what WriteFileAtomic, WriteViaTemporary and the episode writer leave
+// when killed) whose process is gone. Returns how many.
+std::size_t RemoveStaleTemporaries(const std::string& folder);
+
 class RunDirectory {
  public:
   // Throws core::UsageError if `final_dir` exists and `force` is false.

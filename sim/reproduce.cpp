@@ -79,6 +79,16 @@ Json PlanRecord(const Scenario& base, const ReproducePlan& plan, bool quick) {
           {"data_seed", plan.episodes.seed}};
 }
 
+// What killed invocations left: temporary files of dead processes, the
+// episode sets' scratch folders (their episodes are simulated again).
+void RemoveRemains(const std::string& dir) {
+  results::RemoveStaleTemporaries(dir);
+  results::RemoveStaleTemporaries((fs::path(dir) / "episodes").string());
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(fs::path(dir) / "episodes", ec))
+    if (e.path().extension() == ".partial") fs::remove_all(e.path(), ec);
+}
+
 void PrepareDir(const std::string& dir, const Json& record) {
   const fs::path file = fs::path(dir) / "reproduce.json";
   std::error_code ec;
@@ -94,6 +104,7 @@ void PrepareDir(const std::string& dir, const Json& record) {
         throw core::UsageError("uavsim reproduce: " + dir + " holds a reproduction of another " +
                                "plan (" + key + " " + (old.contains(key) ? old[key].dump() : "?") +
                                ", now " + value.dump() + "): use another --out");
+    RemoveRemains(dir);
     return;
   }
   fs::create_directories(fs::path(dir) / "models");

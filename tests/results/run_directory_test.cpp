@@ -99,3 +99,26 @@ TEST_CASE("RunDirectory: staging folders of dead processes are removed, live one
   CHECK(uavsim::results::RemoveStaleStaging(dir + "/other") == 1);
   CHECK_FALSE(fs::exists(other));
 }
+
+TEST_CASE("RemoveStaleTemporaries: the temporary files of dead processes go, the rest stay",
+          "[results]") {
+  // What WriteFileAtomic (".NAME.tmp-PID"), WriteViaTemporary and the episode
+  // writer ("NAME.tmp-PID") leave when killed with SIGKILL (issue 24).
+  const std::string dir = uavsim::testing::TempDir("stale-tmp");
+  const pid_t child = fork();
+  if (child == 0) _exit(0);
+  int status = 0;
+  waitpid(child, &status, 0);
+  const std::string dead = std::to_string(child);
+  const std::vector<std::string> gone = {"pre.eps.tmp-" + dead, ".claims.csv.tmp-" + dead};
+  const std::vector<std::string> kept = {"pre.eps.tmp-" + std::to_string(getppid()),  // alive
+                                         "pre.eps.tmp-" + std::to_string(getpid()),   // ours
+                                         "pre.eps.tmp-12x", "pre.eps", ".tmp-" + dead};
+  for (const auto& f : gone) uavsim::testing::WriteFile(dir + "/" + f, "x");
+  for (const auto& f : kept) uavsim::testing::WriteFile(dir + "/" + f, "x");
+  fs::create_directories(dir + "/folder.tmp-" + dead);  // not a file: kept
+  CHECK(uavsim::results::RemoveStaleTemporaries(dir) == 2);
+  for (const auto& f : gone) CHECK_FALSE(fs::exists(dir + "/" + f));
+  for (const auto& f : kept) CHECK(fs::exists(dir + "/" + f));
+  CHECK(fs::exists(dir + "/folder.tmp-" + dead));
+}
