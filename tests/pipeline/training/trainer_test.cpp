@@ -900,4 +900,36 @@ TEST_CASE("Trainer: each node's IB decoder alone is scored on the held-out obser
   CHECK_THAT(json, Catch::Contains("\"test_decoder\""));
 }
 
+TEST_CASE("Trainer: the stop flag is polled before the first optimisation step", "[pipeline]") {
+  // Issue 24: on raw data the encoding and validation passes run for
+  // minutes, and a SIGTERM used to wait for the next optimisation step.
+  // With reused encoders, the first poll now comes while the episodes are
+  // encoded: before the test episodes are scored (score_classical), which
+  // happens before the edge network's first step.
+  const std::string root = testing::TempDir("trainer-stop");
+  TrainOptions base = Tiny();
+  base.anchored_head = false;
+  InitTorch(1, kSeed);
+  TrainUavLoc(Synthetic(), base, SomeManifest(), root + "/paper");
+
+  struct Stop {};
+  TrainOptions o = base;
+  o.encoders_from = root + "/paper";
+  bool scored = false;
+  int polls = 0;
+  o.score_classical = [&](const std::vector<Episode>&) {
+    scored = true;
+    return std::map<std::string, Evaluation>{};
+  };
+  o.check_stop = [&] {
+    ++polls;
+    throw Stop{};
+  };
+  InitTorch(1, kSeed);
+  CHECK_THROWS_AS(TrainUavLoc(Synthetic(), o, SomeManifest(), root + "/stopped"), Stop);
+  CHECK(polls == 1);
+  CHECK_FALSE(scored);
+  CHECK_FALSE(fs::exists(root + "/stopped/model.json"));
+}
+
 }  // namespace uavsim::pipeline
