@@ -693,8 +693,8 @@ TEST_CASE(
   CHECK(rates.find(",late_fusion,") != std::string::npos);
   CHECK(rates.find(",late_fusion[camera+lidar],") == std::string::npos);
 
-  // Refused, exit 2, naming what: an unknown variant; encoders for a
-  // variant that changes what the nodes send; the anchored head for a
+  // Refused, exit 2, naming what: an unknown variant; encoders of a
+  // variant whose nodes send other latents; the anchored head for a
   // variant; encoders of another scenario's model; a method whose variant
   // has no model beside /pipeline/model; uavloc asked of a variant's model.
   const auto refused = [&](const std::vector<std::string>& args, const std::string& says) {
@@ -706,7 +706,7 @@ TEST_CASE(
   refused({"train", kDefault, "--variant", "nope", "--out", dir + "/x"},
           "--variant expects one of");
   refused({"train", kDefault, "--variant", "raw", "--encoders", main, "--out", dir + "/x"},
-          "trains its own encoders");
+          "whose nodes send other latents than raw's");
   refused({"train", kDefault, "--variant", "gru", "--head", "both", "--out", dir + "/x"},
           "trains the paper's head only");
   {
