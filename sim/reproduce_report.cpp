@@ -733,6 +733,7 @@ void RateFigure(Writer& w, const Arms& arms, const ReproducePlan& plan, const Sc
   spec.group_column = "beam";
   spec.y_error_column = "ci95";
   spec.skip_empty_y = true;
+  spec.y_min_zero = true;  // a rate is >= 0 (a few seeds' intervals reach below)
   spec.key_below = true;
   w.Warn("fig15_rate_snr.png",
          results::PlotCsv((fs::path(w.dir) / "fig15_rate_snr.csv").string(), spec));

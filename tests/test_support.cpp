@@ -231,4 +231,36 @@ void Background::Reaped(int status) {
   rc_ = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
 }
 
+std::size_t Count(const std::string& text, const std::string& what) {
+  std::size_t n = 0;
+  for (std::size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
+std::string Between(const std::string& text, const std::string& open, const std::string& close) {
+  const auto a = text.find(open);
+  if (a == std::string::npos) return "";
+  const auto b = text.find(close, a + open.size());
+  return b == std::string::npos ? "" : text.substr(a + open.size(), b - a - open.size());
+}
+
+std::string FakeGnuplot(const std::string& dir, const std::string& script) {
+  const std::string fake = dir + "/fake-gnuplot";
+  WriteFile(fake, "#!/bin/sh\ncp \"$1\" '" + script + "'\n");
+  std::filesystem::permissions(fake, std::filesystem::perms::owner_all);
+  return fake;
+}
+
+std::pair<int, int> PngSize(const std::string& path) {
+  if (!std::filesystem::exists(path)) return {0, 0};
+  const std::string png = ReadFile(path);
+  if (png.size() < 24 || png.compare(0, 8, "\x89PNG\r\n\x1a\n") != 0) return {0, 0};
+  const auto be32 = [&](std::size_t at) {
+    int v = 0;
+    for (std::size_t i = 0; i < 4; ++i) v = v * 256 + static_cast<unsigned char>(png[at + i]);
+    return v;
+  };
+  return {be32(16), be32(20)};
+}
+
 }  // namespace uavsim::testing

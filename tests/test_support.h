@@ -7,6 +7,7 @@
 #include <Eigen/Core>
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "sim/core/world_geometry.h"
@@ -31,6 +32,19 @@ std::string FindOnPath(const std::string& program);
 std::string TempDir(const std::string& tag);
 
 std::string ReadFile(const std::string& path);
+
+// How many times `what` occurs in `text` (overlaps counted).
+std::size_t Count(const std::string& text, const std::string& what);
+
+// The text between `open` and the next `close` after it ("" if absent).
+std::string Between(const std::string& text, const std::string& open, const std::string& close);
+
+// A stand-in gnuplot in `dir` that copies the script it is given to
+// `script` and draws nothing; returns its path (for a spec's `gnuplot`).
+std::string FakeGnuplot(const std::string& dir, const std::string& script);
+
+// The width and height of a PNG from its IHDR chunk; 0 x 0 if not a PNG.
+std::pair<int, int> PngSize(const std::string& path);
 void WriteFile(const std::string& path, const std::string& content);
 
 // Every src="..." and href="..." of an HTML page, in order.

@@ -13,47 +13,15 @@
 namespace fs = std::filesystem;
 using uavsim::results::BarPlotSpec;
 using uavsim::results::PlotBars;
+using uavsim::testing::Between;
+using uavsim::testing::Count;
+using uavsim::testing::FakeGnuplot;
+using uavsim::testing::PngSize;
 using uavsim::testing::ReadFile;
 using uavsim::testing::TempDir;
 using uavsim::testing::WriteFile;
 
 namespace {
-
-// A stand-in gnuplot that copies the script it is given to `script` and
-// draws nothing.
-std::string FakeGnuplot(const std::string& dir, const std::string& script) {
-  const std::string fake = dir + "/fake-gnuplot";
-  WriteFile(fake, "#!/bin/sh\ncp \"$1\" '" + script + "'\n");
-  fs::permissions(fake, fs::perms::owner_all);
-  return fake;
-}
-
-// The width and height of a PNG from its IHDR chunk; 0 x 0 if not a PNG.
-std::pair<int, int> PngSize(const std::string& path) {
-  if (!fs::exists(path)) return {0, 0};
-  const std::string png = ReadFile(path);
-  if (png.size() < 24 || png.compare(0, 8, "\x89PNG\r\n\x1a\n") != 0) return {0, 0};
-  const auto be32 = [&](std::size_t at) {
-    int v = 0;
-    for (std::size_t i = 0; i < 4; ++i) v = v * 256 + static_cast<unsigned char>(png[at + i]);
-    return v;
-  };
-  return {be32(16), be32(20)};
-}
-
-std::size_t Count(const std::string& text, const std::string& what) {
-  std::size_t n = 0;
-  for (std::size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
-  return n;
-}
-
-// The text between `open` and the next `close` after it ("" if absent).
-std::string Between(const std::string& text, const std::string& open, const std::string& close) {
-  const auto a = text.find(open);
-  if (a == std::string::npos) return "";
-  const auto b = text.find(close, a + open.size());
-  return b == std::string::npos ? "" : text.substr(a + open.size(), b - a - open.size());
-}
 
 // Three categories (the first with a quote and backquotes in its name), the
 // rows out of order; series "a" has no bar in "B" (its interval there is
