@@ -352,6 +352,66 @@ TEST_CASE("FisheyeStereo: night is dark and noisy", "[sensors]") {
   CHECK(night_noise > 3 * day_noise);
 }
 
+TEST_CASE("FisheyeStereo: each pixel's noise is shot plus read noise of its radiance's electrons",
+          "[sensors]") {
+  // The sensor model written out independently: a pixel of linear radiance L
+  // holds L * full_well electrons; shot and read noise make its count
+  // Normal(L fw, L fw + read^2); with gamma 1 the 8-bit value is that count
+  // over fw, clipped to [0, 1], times 255 (two roundings: 1/65535 and
+  // 1/255, the second's variance 1/12 DN^2). Over many frames each pixel's
+  // standardised residual must have mean 0 and variance 1.
+  FisheyeStereoConfig c;
+  c.width_px = 96;
+  c.height_px = 72;
+  c.fx_px = c.fy_px = 35;
+  c.cx_px = 48;
+  c.cy_px = 36;
+  c.pose.position_m = {0, 0, 1.5};
+  c.pose.rpy_deg = {0, -10, 0};
+  c.gamma = 1.0;
+  c.full_well_e = 2000.0;
+  c.read_noise_e = 12.0;
+  c.sensor_noise = true;
+  core::WorldGeometry world;
+  world.meshes = {Ground(), Box({15, 3, 4}, 6.0, core::kMaterialConcrete)};
+  RaycastScene scene(world);
+  FisheyeStereo camera(c, scene);
+  const core::WeatherConfig day;
+  const std::vector<float> radiance = camera.CaptureRadiance(0.0, day);
+  const std::size_t pixels = static_cast<std::size_t>(c.width_px) * c.height_px;
+  REQUIRE(radiance.size() == 2 * pixels);
+  core::RngStream noise(11, "camera");
+  constexpr int kFrames = 60;
+  double sum = 0, sum2 = 0, count = 0;
+  std::vector<double> first_frame;
+  for (int f = 0; f < kFrames; ++f) {
+    const StereoFrame frame = camera.Capture(0.0, day, noise);
+    for (int eye = 0; eye < 2; ++eye) {
+      const GrayImage& image = eye == 0 ? frame.left : frame.right;
+      for (std::size_t i = 0; i < pixels; ++i) {
+        const double L = radiance[eye * pixels + i];
+        const double electrons = L * c.full_well_e;
+        const double sd = std::sqrt(electrons + c.read_noise_e * c.read_noise_e) / c.full_well_e;
+        if (L - 5 * sd < 0.02 || L + 5 * sd > 0.98) continue;  // away from clipping
+        const double variance = sd * sd + 1.0 / (12.0 * 255.0 * 255.0);
+        const double z = (image.pixels[i] / 255.0 - L) / std::sqrt(variance);
+        sum += z;
+        sum2 += z * z;
+        ++count;
+      }
+    }
+  }
+  INFO("standardised residuals: " << count << " pixel-frames, mean " << sum / count
+                                  << ", variance " << sum2 / count - (sum / count) * (sum / count));
+  REQUIRE(count > 100000);
+  const double mean = sum / count, variance = sum2 / count - mean * mean;
+  // Independent pixels: the mean's std is 1 / sqrt(n); the variance's about
+  // sqrt(2 / n); 1/255 quantisation of a Gaussian adds no bias beyond
+  // Sheppard's 1/12 (taken into account above).
+  CHECK(std::abs(mean) < 5.0 / std::sqrt(count));
+  CHECK(std::abs(variance - 1.0) < 0.02);
+}
+
 TEST_CASE("FisheyeStereo: pixels outside the lens's field are black", "[sensors]") {
   FisheyeStereoConfig c;
   c.width_px = 320;
