@@ -401,8 +401,8 @@ TEST_CASE("FisheyeStereo: each pixel's noise is shot plus read noise of its radi
       }
     }
   }
-  INFO("standardised residuals: " << count << " pixel-frames, mean " << sum / count
-                                  << ", variance " << sum2 / count - (sum / count) * (sum / count));
+  INFO("standardised residuals: " << count << " pixel-frames, mean " << sum / count << ", variance "
+                                  << sum2 / count - (sum / count) * (sum / count));
   REQUIRE(count > 100000);
   const double mean = sum / count, variance = sum2 / count - mean * mean;
   // Independent pixels: the mean's std is 1 / sqrt(n); the variance's about
