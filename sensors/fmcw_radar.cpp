@@ -6,9 +6,11 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <complex>
 #include <limits>
+#include <mutex>
 #include <numeric>
 #include <stdexcept>
 #include <tuple>
@@ -27,7 +29,13 @@ using core::kPi;
 using core::kSpeedOfLight_mps;
 constexpr double kReferenceTemperatureK = 290.0;  // IEEE noise-figure reference T0
 constexpr double kMinRangeM = 0.1;
-constexpr std::size_t kBlockRays = 64;
+constexpr std::size_t kBlockRays = 64;  // a multiple of kPacketRays
+constexpr std::size_t kPacketRays = 8;  // RaycastScene::IntersectMany's packets
+// The static cache's margins, as the camera's: moving objects' spheres
+// widened by 1 % + 1 cm, the radar at least 1 cm inside the static bounds.
+constexpr double kSphereMarginRel = 0.01;
+constexpr double kSphereMargin_m = 0.01;
+constexpr double kStaticBoundsMargin_m = 0.01;
 constexpr std::size_t kRadarClasses = 7;  // core::RadarClass's enumerators
 // Fast time is generated as A[q] * B[r], s = kFastBlock q + r: one complex
 // multiply-add per sample, with only the short tables built per scatterer.
@@ -132,6 +140,108 @@ struct FmcwRadar::Echo {
   double snr = 0.0;  // |a|^2
 };
 
+// The coarse grid's hits against the static world alone, made at the first
+// FindScatterers with the cache on (once; a radar captures one frame at a
+// time, but call_once keeps a second thread from reading it half made).
+struct FmcwRadar::GridCache {
+  std::once_flag built;
+  bool usable = false;  // the radar stands inside the static world's bounds
+  std::vector<RayHit> static_hits;
+  std::atomic<std::size_t> last_cast_rays{0};
+};
+
+// The grid's rays in blocks of kBlockRays, in parallel; each block goes
+// through the scene's packets of 8 as one IntersectMany call.
+void FmcwRadar::CastBlocks(const std::vector<RayCell>& cells, bool static_only,
+                           std::vector<RayHit>& hits) const {
+  const Eigen::Vector3f origin_f = X_WR_.translation().cast<float>();
+  const float t_max = static_cast<float>(max_range_m_);
+  hits.assign(cells.size(), RayHit{});
+  const std::size_t blocks = (cells.size() + kBlockRays - 1) / kBlockRays;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks, 1),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      std::array<Ray, kBlockRays> rays;
+                      for (std::size_t b = r.begin(); b != r.end(); ++b) {
+                        const std::size_t begin = b * kBlockRays;
+                        const std::size_t n = std::min(kBlockRays, cells.size() - begin);
+                        for (std::size_t i = 0; i < n; ++i)
+                          rays[i] = {origin_f, cells[begin + i].dir_w, 1e-3f, t_max};
+                        if (static_only)
+                          scene_.IntersectManyStatic(rays.data(), hits.data() + begin, n);
+                        else
+                          scene_.IntersectMany(rays.data(), hits.data() + begin, n);
+                      }
+                    });
+}
+
+std::size_t FmcwRadar::CastGrid(std::vector<RayHit>& hits) const {
+  GridCache& cache = *cache_;
+  std::size_t built = 0;
+  if (static_cache_) {
+    std::call_once(cache.built, [&] {
+      const Eigen::AlignedBox3d bounds = scene_.static_bounds();
+      const Eigen::Vector3d o = X_WR_.translation().cast<float>().cast<double>();
+      const Eigen::Vector3d margin = Eigen::Vector3d::Constant(kStaticBoundsMargin_m);
+      cache.usable = !bounds.isEmpty() && (o.array() > (bounds.min() + margin).array()).all() &&
+                     (o.array() < (bounds.max() - margin).array()).all();
+      if (!cache.usable) return;
+      CastBlocks(grid_, /*static_only=*/true, cache.static_hits);
+      built = grid_.size();
+    });
+  }
+  if (!static_cache_ || !cache.usable) {
+    CastBlocks(grid_, /*static_only=*/false, hits);
+    return grid_.size();
+  }
+  // A ray's hit can differ from the static world's only if the ray meets a
+  // moving object's sphere (widened as the camera's cache widens it); its
+  // packet of 8 is then cast whole through the full scene, as the full cast
+  // casts it (Embree's traversal depends on the packet's active rays).
+  struct Cone {
+    Eigen::Vector3d axis;
+    double cos_half;
+  };
+  std::vector<Cone> cones;
+  const Eigen::Vector3d o = X_WR_.translation().cast<float>().cast<double>();
+  for (const BoundingSphere& sphere : scene_.moving_object_bounds()) {
+    const double radius_m = sphere.radius_m * (1.0 + kSphereMarginRel) + kSphereMargin_m;
+    const Eigen::Vector3d to_center = sphere.center_m - o;
+    const double distance_m = to_center.norm();
+    if (!(distance_m > radius_m)) {  // the radar is inside (or the pose is not finite)
+      CastBlocks(grid_, /*static_only=*/false, hits);
+      return built + grid_.size();
+    }
+    if (distance_m - radius_m > max_range_m_) continue;  // beyond every ray's end
+    const double sin_half = radius_m / distance_m;
+    cones.push_back({to_center / distance_m, std::sqrt(1.0 - sin_half * sin_half)});
+  }
+  hits = cache.static_hits;
+  if (cones.empty()) return built;
+  const Eigen::Vector3f origin_f = X_WR_.translation().cast<float>();
+  const float t_max = static_cast<float>(max_range_m_);
+  std::size_t cast = 0;
+  std::array<Ray, kPacketRays> rays;
+  for (std::size_t first = 0; first < grid_.size(); first += kPacketRays) {
+    const std::size_t n = std::min(kPacketRays, grid_.size() - first);
+    bool meets = false;
+    for (std::size_t i = first; i < first + n && !meets; ++i) {
+      const Eigen::Vector3d d = grid_[i].dir_w.cast<double>().normalized();
+      for (const Cone& cone : cones)
+        if (d.dot(cone.axis) >= cone.cos_half) {
+          meets = true;
+          break;
+        }
+    }
+    if (!meets) continue;
+    for (std::size_t i = 0; i < n; ++i) rays[i] = {origin_f, grid_[first + i].dir_w, 1e-3f, t_max};
+    scene_.IntersectMany(rays.data(), hits.data() + first, n);
+    cast += n;
+  }
+  return built + cast;
+}
+
+std::size_t FmcwRadar::last_cast_rays() const { return cache_->last_cast_rays; }
+
 FmcwRadar::FmcwRadar(const FmcwRadarConfig& config, RaycastScene& scene)
     : config_(config), scene_(scene) {
   // The JSON rules are the one statement of what is valid: run them on a
@@ -180,6 +290,7 @@ FmcwRadar::FmcwRadar(const FmcwRadarConfig& config, RaycastScene& scene)
     }
   }
   rain_fft_ = std::make_unique<RainFft>(c.chirps_per_frame, c.adc_samples);
+  cache_ = std::make_unique<GridCache>();
 }
 
 FmcwRadar::~FmcwRadar() = default;
@@ -215,28 +326,10 @@ std::vector<Scatterer> FmcwRadar::FindScatterers(double t_s,
                                                  const std::vector<BoundingSphere>& refine) const {
   const FmcwRadarConfig& c = config_;
   const Eigen::Vector3d origin = X_WR_.translation();
-  const Eigen::Vector3f origin_f = origin.cast<float>();
-  const float t_max = static_cast<float>(max_range_m_);
-
-  auto cast = [&](const std::vector<RayCell>& cells, std::vector<RayHit>& hits) {
-    hits.assign(cells.size(), RayHit{});
-    const std::size_t blocks = (cells.size() + kBlockRays - 1) / kBlockRays;
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks, 1),
-                      [&](const tbb::blocked_range<std::size_t>& r) {
-                        std::array<Ray, kBlockRays> rays;
-                        for (std::size_t b = r.begin(); b != r.end(); ++b) {
-                          const std::size_t begin = b * kBlockRays;
-                          const std::size_t n = std::min(kBlockRays, cells.size() - begin);
-                          for (std::size_t i = 0; i < n; ++i)
-                            rays[i] = {origin_f, cells[begin + i].dir_w, 1e-3f, t_max};
-                          scene_.IntersectMany(rays.data(), hits.data() + begin, n);
-                        }
-                      });
-  };
 
   const std::vector<RayCell>& grid = grid_;
   std::vector<RayHit> grid_hits;
-  cast(grid, grid_hits);
+  const std::size_t cast_rays = CastGrid(grid_hits);
 
   // Cells near a moving object, or that see a sphere the caller passed, are
   // re-cast finer: refine_range_m holds the nearest range that asked for it.
@@ -301,7 +394,8 @@ std::vector<Scatterer> FmcwRadar::FindScatterers(double t_s,
       }
     }
   std::vector<RayHit> fine_hits;
-  if (!fine.empty()) cast(fine, fine_hits);
+  if (!fine.empty()) CastBlocks(fine, /*static_only=*/false, fine_hits);
+  cache_->last_cast_rays = cast_rays + fine.size();
 
   // Merge cells: object, range, the two direction cosines and velocity (the
   // static world has no velocity). Cells are hashed, so a fine merge costs

@@ -226,6 +226,19 @@ class FmcwRadar {
   // configured polarisation, horizontal path.
   const core::RainCoefficients& rain_coefficients() const { return rain_; }
 
+  // The static-scene cache: on by default, the coarse grid's hits against
+  // the static world are kept from the first FindScatterers, and each frame
+  // re-casts through the full scene only the packets of 8 rays one of which
+  // meets a moving object's bounding sphere (widened by 1 % + 1 cm). Off:
+  // every ray every frame. Either way the scatterers are the same, bit for
+  // bit (RaycastScene::IntersectManyStatic's guarantee; a radar outside the
+  // static world's bounds or inside a moving object's sphere casts all).
+  void set_static_cache(bool on) { static_cache_ = on; }
+  bool static_cache() const { return static_cache_; }
+  // Rays the last FindScatterers cast: coarse rays re-cast (all of them
+  // without the cache) and refined rays. 0 before the first.
+  std::size_t last_cast_rays() const;
+
   double wavelength_m() const { return lambda_m_; }
   double slope_hz_per_s() const { return slope_hz_per_s_; }
   double chirp_period_s() const { return chirp_period_s_; }
@@ -248,6 +261,12 @@ class FmcwRadar {
   };
   bool InFieldOfView(const Eigen::Vector3d& u_W) const;
   void AddMultipath(std::vector<Scatterer>& scatterers) const;
+  struct GridCache;
+  void CastBlocks(const std::vector<RayCell>& cells, bool static_only,
+                  std::vector<RayHit>& hits) const;
+  // The coarse grid's hits, from the cache where that is exact; returns the
+  // rays cast.
+  std::size_t CastGrid(std::vector<RayHit>& hits) const;
   struct RainFft;  // the FFTW plan of the rain field (FFTW stays private to sensors/)
   void AddRainClutter(double rain_mm_h, std::uint64_t frame_key, RadarCube& cube) const;
 
@@ -265,6 +284,8 @@ class FmcwRadar {
   double d_az_rad_ = 0.0, d_el_rad_ = 0.0;
   std::vector<RayCell> grid_;
   std::unique_ptr<RainFft> rain_fft_;
+  std::unique_ptr<GridCache> cache_;
+  bool static_cache_ = true;
 };
 
 }  // namespace uavsim::sensors

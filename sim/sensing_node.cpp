@@ -115,7 +115,9 @@ class RadarNodeSensor final : public NodeSensor {
       : c_(std::move(c)),
         radar_(node.sensor.radar, *c_.scene),
         processor_(node.sensor.radar),
-        preprocess_(node.sensor.radar, s.pipeline.preprocess) {}
+        preprocess_(node.sensor.radar, s.pipeline.preprocess) {
+    radar_.set_static_cache(s.execution.static_cache);
+  }
 
  private:
   NodeFrame DoCapture(double t_s, core::RngStream& noise) override {
