@@ -55,21 +55,23 @@ class CameraNodeSensor final : public NodeSensor {
   }
 
  private:
-  NodeFrame DoCapture(double t_s, core::RngStream& noise) override {
+  Preprocess DoAcquire(double t_s, core::RngStream& noise) override {
     auto frame = std::make_shared<sensors::StereoFrame>();
     {
       const core::WallProfile::Scope timing(c_.capture);
       c_.scene->SetTime(t_s);
       *frame = camera_.Capture(t_s, c_.weather, noise);
     }
-    const core::WallProfile::Scope timing(c_.preprocess);
-    NodeFrame out{frame->RawBytes(), {}, {}};
-    out.content.camera = preprocess_.Process(*frame);
-    if (c_.recorder)
-      out.record = [recorder = c_.recorder, &id = c_.id, frame] {
-        recorder->RecordCamera(id, *frame);
-      };
-    return out;
+    return [this, frame] {
+      const core::WallProfile::Scope timing(c_.preprocess);
+      NodeFrame out{frame->RawBytes(), {}, {}};
+      out.content.camera = preprocess_.Process(*frame);
+      if (c_.recorder)
+        out.record = [recorder = c_.recorder, &id = c_.id, frame] {
+          recorder->RecordCamera(id, *frame);
+        };
+      return out;
+    };
   }
 
   SensorContext c_;
@@ -86,20 +88,22 @@ class LidarNodeSensor final : public NodeSensor {
 
  private:
   // The LiDAR poses the scene at each point's own time.
-  NodeFrame DoCapture(double t_s, core::RngStream& noise) override {
+  Preprocess DoAcquire(double t_s, core::RngStream& noise) override {
     auto frame = std::make_shared<sensors::PointCloudFrame>();
     {
       const core::WallProfile::Scope timing(c_.capture);
       *frame = lidar_.Capture(t_s, c_.weather, noise);
     }
-    const core::WallProfile::Scope timing(c_.preprocess);
-    NodeFrame out{frame->RawBytes(), {}, {}};
-    out.content.points = preprocess_.Process(*frame);
-    if (c_.recorder)
-      out.record = [recorder = c_.recorder, &id = c_.id, frame] {
-        recorder->RecordLidar(id, *frame);
-      };
-    return out;
+    return [this, frame] {
+      const core::WallProfile::Scope timing(c_.preprocess);
+      NodeFrame out{frame->RawBytes(), {}, {}};
+      out.content.points = preprocess_.Process(*frame);
+      if (c_.recorder)
+        out.record = [recorder = c_.recorder, &id = c_.id, frame] {
+          recorder->RecordLidar(id, *frame);
+        };
+      return out;
+    };
   }
 
   SensorContext c_;
@@ -120,7 +124,7 @@ class RadarNodeSensor final : public NodeSensor {
   }
 
  private:
-  NodeFrame DoCapture(double t_s, core::RngStream& noise) override {
+  Preprocess DoAcquire(double t_s, core::RngStream& noise) override {
     std::uint64_t raw_bytes = 0;
     auto frame = std::make_shared<sensors::RadarFrame>();
     {
@@ -133,14 +137,16 @@ class RadarNodeSensor final : public NodeSensor {
       raw_bytes = cube.RawBytes();
       *frame = processor_.Process(cube, radar_.X_WR(), t_s);
     }
-    const core::WallProfile::Scope timing(c_.preprocess);
-    NodeFrame out{raw_bytes, {}, {}};
-    out.content.points = preprocess_.Process(*frame);
-    if (c_.recorder)
-      out.record = [recorder = c_.recorder, &id = c_.id, frame] {
-        recorder->RecordRadar(id, *frame);
-      };
-    return out;
+    return [this, frame, raw_bytes] {
+      const core::WallProfile::Scope timing(c_.preprocess);
+      NodeFrame out{raw_bytes, {}, {}};
+      out.content.points = preprocess_.Process(*frame);
+      if (c_.recorder)
+        out.record = [recorder = c_.recorder, &id = c_.id, frame] {
+          recorder->RecordRadar(id, *frame);
+        };
+      return out;
+    };
   }
 
   SensorContext c_;
@@ -163,13 +169,19 @@ std::uint64_t NodeContent::PreprocessedBytes() const {
   return 0;
 }
 
-NodeFrame NodeSensor::Capture(double t_s, core::RngStream& noise) {
-  NodeFrame frame = DoCapture(t_s, noise);
-  if (frame.raw_bytes == 0) throw std::logic_error("a sensor produced a frame of no raw data");
-  if (frame.content.camera.has_value() == frame.content.points.has_value())
-    throw std::logic_error("a node's pre-processing gave neither or both observation kinds");
-  return frame;
+NodeSensor::Preprocess NodeSensor::Acquire(double t_s, core::RngStream& noise) {
+  Preprocess preprocess = DoAcquire(t_s, noise);
+  if (!preprocess) throw std::logic_error("a sensor's capture gave nothing to pre-process");
+  return [preprocess = std::move(preprocess)] {
+    NodeFrame frame = preprocess();
+    if (frame.raw_bytes == 0) throw std::logic_error("a sensor produced a frame of no raw data");
+    if (frame.content.camera.has_value() == frame.content.points.has_value())
+      throw std::logic_error("a node's pre-processing gave neither or both observation kinds");
+    return frame;
+  };
 }
+
+NodeFrame NodeSensor::Capture(double t_s, core::RngStream& noise) { return Acquire(t_s, noise)(); }
 
 std::unique_ptr<NodeSensor> MakeNodeSensor(const NodeConfig& node, const Scenario& scenario,
                                            WorldModel& world, Recorder* recorder,
@@ -203,33 +215,75 @@ SensingNode::SensingNode(const NodeConfig& config, std::uint32_t index,
       ahead_of_time_(scenario.execution.parallel_nodes) {}
 
 SensingNode::~SensingNode() {
-  // A frame in the making uses the sensor and the noise stream: wait for it.
-  if (next_.valid()) next_.wait();
+  // Frames in the making use the sensor and the noise stream: wait for them.
+  for (Ahead& a : ahead_)
+    if (a.frame.valid()) a.frame.wait();
 }
 
 void SensingNode::Start(core::Simulator& sim, core::SimTime t_end) {
   clock_.Start(sim, 0, t_end);
-  CaptureNextAhead();
+  if (!ahead_of_time_) return;
+  if (const std::optional<core::SimTime> t = clock_.next_delivery()) MakeAhead(*t);
+  if (const std::optional<core::SimTime> t = clock_.delivery_after_next()) MakeAhead(*t);
 }
 
 // The node's frames depend on nothing the event loop does (the world is a
 // function of time; the sensor, its pre-processing and the noise stream are
-// the node's own), so the next one may be made on a thread of its own while
-// the loop runs: the frames, and so the run, are the same either way.
-void SensingNode::CaptureNextAhead() {
-  if (!ahead_of_time_) return;
-  const std::optional<core::SimTime> t = clock_.next_delivery();
-  if (!t) return;
-  next_t_ = *t;
-  next_ = std::async(std::launch::async,
-                     [this, t_s = core::ToSeconds(*t)] { return sensor_->Capture(t_s, noise_); });
+// the node's own), so they may be made on threads of their own while the
+// loop runs: the frames, and so the run, are the same either way. Two frames
+// are in the making at once, a pipeline of two stages: frame k + 1's sensor
+// capture runs while frame k is pre-processed. Captures follow one another
+// in frame order (the noise stream's draws keep their order), and so do the
+// pre-processings (the pre-processor's state, e.g. MOG2's background).
+void SensingNode::MakeAhead(core::SimTime t) {
+  auto acquired = std::make_shared<std::promise<void>>();
+  auto preprocessed = std::make_shared<std::promise<void>>();
+  Ahead a;
+  a.t = t;
+  a.acquired = acquired->get_future().share();
+  a.preprocessed = preprocessed->get_future().share();
+  std::shared_future<void> previous_acquired, previous_preprocessed;
+  if (!ahead_.empty()) {
+    previous_acquired = ahead_.back().acquired;
+    previous_preprocessed = ahead_.back().preprocessed;
+  }
+  a.frame = std::async(std::launch::async, [this, t_s = core::ToSeconds(t), previous_acquired,
+                                            previous_preprocessed, acquired, preprocessed] {
+    // Each stage signals its end whatever happens, so that the next frame's
+    // stage never waits forever; an exception reaches TakeFrame.
+    NodeSensor::Preprocess preprocess;
+    try {
+      if (previous_acquired.valid()) previous_acquired.wait();
+      preprocess = sensor_->Acquire(t_s, noise_);
+    } catch (...) {
+      acquired->set_value();
+      if (previous_preprocessed.valid()) previous_preprocessed.wait();
+      preprocessed->set_value();
+      throw;
+    }
+    acquired->set_value();
+    try {
+      if (previous_preprocessed.valid()) previous_preprocessed.wait();
+      NodeFrame frame = preprocess();
+      preprocessed->set_value();
+      return frame;
+    } catch (...) {
+      preprocessed->set_value();
+      throw;
+    }
+  });
+  ahead_.push_back(std::move(a));
 }
 
 NodeFrame SensingNode::TakeFrame(core::SimTime t) {
-  if (!next_.valid()) return sensor_->Capture(core::ToSeconds(t), noise_);
-  if (next_t_ != t) throw std::logic_error("a node's frame made ahead is for another time");
-  NodeFrame frame = next_.get();
-  CaptureNextAhead();
+  if (ahead_.empty()) return sensor_->Capture(core::ToSeconds(t), noise_);
+  Ahead a = std::move(ahead_.front());
+  ahead_.pop_front();
+  if (a.t != t) throw std::logic_error("a node's frame made ahead is for another time");
+  NodeFrame frame = a.frame.get();
+  // Inside this tick's callback the clock already foretells the tick after
+  // the next one: keep two frames in the making.
+  if (const std::optional<core::SimTime> after = clock_.delivery_after_next()) MakeAhead(*after);
   return frame;
 }
 

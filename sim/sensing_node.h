@@ -10,6 +10,7 @@
 #pragma once
 
 #include <cstdint>
+#include <deque>
 #include <functional>
 #include <future>
 #include <memory>
@@ -50,12 +51,16 @@ struct NodeContent {
   std::uint64_t PreprocessedBytes() const;
 };
 
-// A sensor behind one interface: Capture poses its view of the world at t_s,
-// captures, pre-processes, and says how to record the raw frame when the
-// run records this modality. Capture touches only the sensor's own state
-// and the noise stream it is given: nodes may capture on threads of their
-// own. The public method keeps the checks; each sensor's work
-// is its private DoCapture (ns-3's CalcRxPower / DoCalcRxPower).
+// A sensor behind one interface, in two stages: Acquire poses its view of
+// the world at t_s and captures (drawing from `noise`); the function it
+// returns pre-processes that capture and says how to record the raw frame
+// when the run records this modality. Acquire touches only the sensor's own
+// state and the noise stream it is given, the pre-processing only the
+// node's pre-processor: nodes may capture on threads of their own, and a
+// node may capture frame k + 1 while frame k is pre-processed (captures in
+// frame order, one at a time; pre-processings likewise). The public methods
+// keep the checks; each sensor's work is its private DoAcquire (ns-3's
+// CalcRxPower / DoCalcRxPower).
 struct NodeFrame {
   std::uint64_t raw_bytes = 0;  // the raw frame (or radar cube) as the sensor produced it
   NodeContent content;          // its pre-processed content
@@ -67,12 +72,17 @@ struct NodeFrame {
 
 class NodeSensor {
  public:
+  // Pre-processes one capture; throws std::logic_error if the sensor
+  // produced no raw data or the pre-processing neither or both observation
+  // kinds.
+  using Preprocess = std::function<NodeFrame()>;
   virtual ~NodeSensor() = default;
-  // Throws std::logic_error if the sensor produced no raw data.
+  Preprocess Acquire(double t_s, core::RngStream& noise);
+  // Both stages at once.
   NodeFrame Capture(double t_s, core::RngStream& noise);
 
  private:
-  virtual NodeFrame DoCapture(double t_s, core::RngStream& noise) = 0;
+  virtual Preprocess DoAcquire(double t_s, core::RngStream& noise) = 0;
 };
 
 // The node's sensor for its configuration: the stereo fisheye camera, the
@@ -108,9 +118,9 @@ class SensingNode {
   };
 
   // `index`: the node's position in the scenario's node list. With the
-  // scenario's execution.parallel_nodes, the node captures each frame on a
-  // thread of its own ahead of its time, while the event loop runs (the
-  // same frames, byte for byte).
+  // scenario's execution.parallel_nodes, the node makes its next two frames
+  // on threads of their own ahead of their time, while the event loop runs
+  // (the same frames, byte for byte).
   SensingNode(const NodeConfig& config, std::uint32_t index, std::unique_ptr<NodeSensor> sensor,
               const Scenario& scenario, Wiring wiring);
   ~SensingNode();
@@ -127,9 +137,17 @@ class SensingNode {
   const NodeTraffic& traffic() const { return traffic_; }
 
  private:
+  // A frame in the making (execution.parallel_nodes): its time, the ends
+  // of its two stages (the next frame's stages wait for them) and the
+  // frame.
+  struct Ahead {
+    core::SimTime t = 0;
+    std::shared_future<void> acquired, preprocessed;
+    std::future<NodeFrame> frame;
+  };
   void OnFrame(core::SimTime t);
   NodeFrame TakeFrame(core::SimTime t);
-  void CaptureNextAhead();
+  void MakeAhead(core::SimTime t);
 
   const NodeConfig& config_;
   std::uint32_t index_;
@@ -141,8 +159,7 @@ class SensingNode {
   NodeTraffic traffic_;
   core::PeriodicProcess clock_;
   bool ahead_of_time_;
-  std::future<NodeFrame> next_;  // the next frame, in the making
-  core::SimTime next_t_ = 0;     // its time
+  std::deque<Ahead> ahead_;  // the next two frames, oldest first
 };
 
 }  // namespace uavsim::sim

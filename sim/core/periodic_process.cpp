@@ -126,8 +126,21 @@ void PeriodicProcess::Fire() {
   callback_(k, t_ns);
 }
 
+std::optional<SimTime> PeriodicProcess::delivery_after_next() const {
+  if (!running()) return std::nullopt;
+  const SimTime nominal_ns = NominalTime(next_tick_ + 1);
+  if (nominal_ns >= t_stop_ns_) return std::nullopt;
+  // As ScheduleNext will compute it once the pending tick is delivered.
+  return JitteredTime(next_tick_ + 1, nominal_ns, pending_time_ns_);
+}
+
 SimTime PeriodicProcess::JitteredTime(std::int64_t k, SimTime nominal_ns) const {
-  const SimTime lower_ns = std::max(last_delivered_ns_, t_start_ns_);
+  return JitteredTime(k, nominal_ns, last_delivered_ns_);
+}
+
+SimTime PeriodicProcess::JitteredTime(std::int64_t k, SimTime nominal_ns,
+                                      SimTime last_delivered_ns) const {
+  const SimTime lower_ns = std::max(last_delivered_ns, t_start_ns_);
   const SimTime upper_ns = t_stop_ns_ - 1;  // >= nominal_ns >= t_start_ns_ by construction
   long double t_ns = static_cast<long double>(nominal_ns);
   if (jitter_s_ > 0.0) {

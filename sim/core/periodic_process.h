@@ -78,6 +78,10 @@ class PeriodicProcess {
     return running() ? std::optional<SimTime>(pending_time_ns_) : std::nullopt;
   }
 
+  // When the tick after the next one will be delivered (jitter included),
+  // if both fall in the window: what next_delivery() will say once the next
+  // tick is delivered, so a component may start two ticks' work ahead.
+  std::optional<SimTime> delivery_after_next() const;
   // The nominal time of tick k >= 0: phase + round(k * 1e9 / rate_hz) ns,
   // saturating at kTimeMax.
   SimTime NominalTime(std::int64_t k) const;
@@ -90,6 +94,7 @@ class PeriodicProcess {
   void Fire();
   std::int64_t FirstTickAtOrAfter(SimTime t_ns) const;
   SimTime JitteredTime(std::int64_t k, SimTime nominal_ns) const;
+  SimTime JitteredTime(std::int64_t k, SimTime nominal_ns, SimTime last_delivered_ns) const;
 
   double rate_hz_;
   SimTime phase_ns_;

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <optional>
 #include <stdexcept>
 #include <utility>
 #include <vector>
@@ -308,5 +309,52 @@ TEST_CASE("PeriodicProcess: jitter larger than the period keeps ticks ordered in
     REQUIRE(rec.ticks[i].t_ns >= start);
     REQUIRE(rec.ticks[i].t_ns < stop);
     if (i > 0) REQUIRE(rec.ticks[i].t_ns >= rec.ticks[i - 1].t_ns);
+  }
+}
+
+TEST_CASE("PeriodicProcess: next_delivery and delivery_after_next foretell the ticks delivered",
+          "[core]") {
+  // Every tick's delivery, as seen from inside the callback two ticks
+  // earlier, must be the delivery that then happens: with jitter whose
+  // clamps work (50 ms on a 10 ms period), without jitter, and at the
+  // window's end (no tick beyond it is foretold).
+  for (const double jitter_s : {0.0, 2e-3, 50e-3}) {
+    Simulator sim;
+    std::vector<SimTime> delivered;
+    std::vector<std::optional<SimTime>> next, after_next;
+    PeriodicProcess* self = nullptr;
+    PeriodicProcess process(100, 0.003, jitter_s, RngStream(5, "clock"),
+                            [&](std::int64_t, SimTime t_ns) {
+                              delivered.push_back(t_ns);
+                              next.push_back(self->next_delivery());
+                              after_next.push_back(self->delivery_after_next());
+                            });
+    self = &process;
+    const SimTime start = Seconds(1), stop = Seconds(3);
+    sim.RunUntil(start);
+    process.Start(sim, start, stop);
+    REQUIRE(process.next_delivery().has_value());
+    const SimTime first = *process.next_delivery();
+    const std::optional<SimTime> second = process.delivery_after_next();
+    sim.Run();
+    INFO("jitter " << jitter_s << " s");
+    REQUIRE(delivered.size() == 200);
+    CHECK(first == delivered[0]);
+    REQUIRE(second.has_value());
+    CHECK(*second == delivered[1]);
+    for (std::size_t i = 0; i < delivered.size(); ++i) {
+      if (i + 1 < delivered.size()) {
+        REQUIRE(next[i].has_value());
+        CHECK(*next[i] == delivered[i + 1]);
+      } else {
+        CHECK(!next[i].has_value());
+      }
+      if (i + 2 < delivered.size()) {
+        REQUIRE(after_next[i].has_value());
+        CHECK(*after_next[i] == delivered[i + 2]);
+      } else {
+        CHECK(!after_next[i].has_value());
+      }
+    }
   }
 }
