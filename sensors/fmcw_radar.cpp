@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <boost/random/normal_distribution.hpp>
 #include <cmath>
 #include <complex>
 #include <limits>
@@ -16,7 +17,6 @@
 #include <tuple>
 #include <unordered_map>
 
-#include "sim/core/counter_normal.h"
 #include "sim/core/error.h"
 #include "sim/core/json_io.h"
 #include "sim/core/physical_constants.h"
@@ -63,6 +63,26 @@ inline void AccumulateBlock(float cr, float ci, const float* __restrict b_re,
     acc_im[r] += cr * b_im[r] + ci * b_re[r];
   }
 }
+
+// SplitMix64 (Steele, Lea & Flood 2014) inline: the per-row noise generator,
+// seeded from the row's derived key. It passes BigCrush and costs a few
+// cycles, so the thermal noise of a frame (0.8 M normals) stays cheap.
+class SplitMixEngine {
+ public:
+  using result_type = std::uint64_t;
+  explicit SplitMixEngine(std::uint64_t seed) : state_(seed) {}
+  static constexpr result_type min() { return 0; }
+  static constexpr result_type max() { return std::numeric_limits<result_type>::max(); }
+  result_type operator()() {
+    std::uint64_t z = (state_ += 0x9e3779b97f4a7c15ull);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    return z ^ (z >> 31);
+  }
+
+ private:
+  std::uint64_t state_;
+};
 
 // A surface's backscatter model with its constants evaluated once.
 struct SurfaceTerms {
@@ -654,15 +674,12 @@ void FmcwRadar::AddRainClutter(double rain_mm_h, std::uint64_t frame_key, RadarC
   const std::size_t plane = static_cast<std::size_t>(ns) * nc;
   std::vector<std::complex<float>> fields(plane * antennas);
   tbb::parallel_for(0, antennas, [&](int a) {
-    // Cell i's real and imaginary parts are the normals at 2 i and 2 i + 1
-    // of the element's stream; most cells are empty (rain falls into a few
-    // Doppler bins), so they are drawn one by one.
-    const core::CounterNormal normal(core::Mix64(frame_key ^ kRainStreamSalt ^ core::Mix64(a)));
+    SplitMixEngine engine(core::Mix64(frame_key ^ kRainStreamSalt ^ core::Mix64(a)));
+    boost::random::normal_distribution<float> normal(0.0f, 1.0f);
     std::complex<float>* g = fields.data() + plane * a;
     for (std::size_t i = 0; i < plane; ++i) {
       if (sigma[i] == 0.0f) continue;
-      const auto re = static_cast<float>(normal.At(2 * i));
-      const auto im = static_cast<float>(normal.At(2 * i + 1));
+      const float re = normal(engine), im = normal(engine);
       g[i] = {sigma[i] * re, sigma[i] * im};
     }
     rain_fft_->Inverse(g);
@@ -792,8 +809,7 @@ RadarCube FmcwRadar::Synthesize(const std::vector<Scatterer>& scatterers,
       }
     }
     std::vector<float> row_re(padded), row_im(padded);
-    std::vector<float> noise(c.thermal_noise ? 2 * static_cast<std::size_t>(ns) : 0);
-    const auto noise_std = static_cast<float>(std::sqrt(0.5));
+    boost::random::normal_distribution<float> normal(0.0f, static_cast<float>(std::sqrt(0.5)));
     for (int ch = 0; ch < nc; ++ch) {
       std::fill(row_re.begin(), row_re.end(), 0.0f);
       std::fill(row_im.begin(), row_im.end(), 0.0f);
@@ -804,13 +820,13 @@ RadarCube FmcwRadar::Synthesize(const std::vector<Scatterer>& scatterers,
                           &row_im[q * kFastBlock]);
       std::complex<float>* out = cube.data.data() + (static_cast<std::size_t>(ant) * nc + ch) * ns;
       if (c.thermal_noise) {
-        // Sample s's real and imaginary parts: the row stream's normals at
-        // 2 s and 2 s + 1, filled in one vectorised pass.
-        core::CounterNormal(
-            core::Mix64(frame_key ^ core::Mix64(static_cast<std::uint64_t>(ant) * nc + ch)))
-            .Fill(0, noise.data(), noise.size());
-        for (int s = 0; s < ns; ++s)
-          out[s] = {row_re[s] + noise_std * noise[2 * s], row_im[s] + noise_std * noise[2 * s + 1]};
+        SplitMixEngine engine(
+            core::Mix64(frame_key ^ core::Mix64(static_cast<std::uint64_t>(ant) * nc + ch)));
+        for (int s = 0; s < ns; ++s) {
+          const float n_re = normal(engine);
+          const float n_im = normal(engine);
+          out[s] = {row_re[s] + n_re, row_im[s] + n_im};
+        }
       } else {
         for (int s = 0; s < ns; ++s) out[s] = {row_re[s], row_im[s]};
       }

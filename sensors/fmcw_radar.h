@@ -141,8 +141,8 @@
 //
 // Determinism: Synthesize draws one 64-bit key from `noise` per frame. Each
 // (antenna, chirp) row's thermal noise and each element's rain field come
-// from a counter-based normal stream (sim/core/counter_normal.h) keyed by
-// the frame's key and the row or element; every sum has one task and a
+// from a SplitMix64 generator seeded by a key derived from it and the row or
+// element (normals by Boost.Random's ziggurat); every sum has one task and a
 // fixed order, and the FFTW plan is made with FFTW_ESTIMATE (no timing). So
 // a seed gives the same cube bit for bit with any number of threads (TBB
 // inside). FindScatterers has no
