@@ -121,21 +121,27 @@ void ForwardLoops(const ScanShape& s, const ScanInputs& in, torch::Tensor& H, to
   const int64_t grain = std::max<int64_t>(1, 16384 / std::max<int64_t>(1, L * N));
   at::parallel_for(0, s.batch * D, grain, [&](int64_t begin, int64_t end) {
     const std::vector<T> zero(static_cast<std::size_t>(N), T(0));
+    std::vector<T> terms_buffer(static_cast<std::size_t>(N));
+    T* __restrict terms = terms_buffer.data();
     for (int64_t bd = begin; bd < end; ++bd) {
       const int64_t b = bd / D, d = bd % D;
       const T* h_prev = zero.data();
       for (int64_t l = 0; l < L; ++l) {
         const int64_t i = bd * L + l;
-        const T* a = dA + i * N;
-        const T* bl = Bt + (b * L + l) * N;
-        const T* cl = Ct + (b * L + l) * N;
-        T* h = h_all + i * N;
+        const T* __restrict a = dA + i * N;
+        const T* __restrict bl = Bt + (b * L + l) * N;
+        const T* __restrict cl = Ct + (b * L + l) * N;
+        T* __restrict h = h_all + i * N;
         const T dtu = dt[i] * u[i];
-        T y = T(0);
+        // The state update vectorises; the sum over n stays in index order
+        // (a loop-carried float sum is not reassociated), so the bits are
+        // those of one loop doing both.
         for (int64_t n = 0; n < N; ++n) {
           h[n] = a[n] * h_prev[n] + dtu * bl[n];
-          y += cl[n] * h[n];
+          terms[n] = cl[n] * h[n];
         }
+        T y = T(0);
+        for (int64_t n = 0; n < N; ++n) y += terms[n];
         h_prev = h;
         ys_all[i] = y + d_skip[d] * u[i];
         out_all[i] = ys_all[i] * Silu(z[i]);
@@ -153,6 +159,28 @@ struct ScanGradients {
   torch::Tensor dA_rows;              // [B, D, N]
   torch::Tensor dD_rows, dbias_rows;  // [B, D]
 };
+
+// One step of the adjoint recurrence over the states n: every per-state
+// term, elementwise (the caller sums the Δ and u terms in index order).
+// Its own function so that the restrict-qualified parameters let the
+// compiler vectorise the loop.
+template <typename T>
+void BackwardStep(int64_t N, T dys, T dtl, T ul, const T* __restrict h, const T* __restrict h_prev,
+                  const T* __restrict a, const T* __restrict a_d, const T* __restrict bl,
+                  const T* __restrict cl, T* __restrict adj, T* __restrict dcl,
+                  T* __restrict dA_acc, T* __restrict dbl, T* __restrict ddt_terms,
+                  T* __restrict du_terms) {
+  for (int64_t n = 0; n < N; ++n) {
+    dcl[n] += dys * h[n];
+    const T gh = adj[n] + dys * cl[n];
+    const T g_decay = gh * h_prev[n] * a[n];  // dLoss/d(Δ_l A_n)
+    ddt_terms[n] = g_decay * a_d[n] + gh * bl[n] * ul;
+    dA_acc[n] += g_decay * dtl;
+    dbl[n] += gh * dtl * ul;
+    du_terms[n] = gh * dtl * bl[n];
+    adj[n] = gh * a[n];
+  }
+}
 
 // The adjoint recurrence backwards in time, one batch row per task: the d
 // loop inside a row accumulates dB and dC (shared by the channels) in a
@@ -185,23 +213,27 @@ void BackwardLoops(const ScanShape& s, const ScanInputs& in, const torch::Tensor
   T* dbias_rows = g.dbias_rows.data_ptr<T>();
   at::parallel_for(0, s.batch, 1, [&](int64_t begin, int64_t end) {
     const std::vector<T> zero(static_cast<std::size_t>(N), T(0));
-    std::vector<T> adj(static_cast<std::size_t>(N));  // dLoss/dh_l through h_{l+1}..h_L
+    std::vector<T> adj_buffer(static_cast<std::size_t>(N));  // dLoss/dh_l through h_{l+1}..h_L
+    std::vector<T> terms_buffer(2 * static_cast<std::size_t>(N));
+    T* __restrict adj = adj_buffer.data();
+    T* __restrict ddt_terms = terms_buffer.data();
+    T* __restrict du_terms = ddt_terms + N;
     for (int64_t b = begin; b < end; ++b) {
       for (int64_t d = 0; d < D; ++d) {
         const int64_t bd = b * D + d;
         const T* a_d = A + d * N;
-        T* dA_acc = dA_rows + bd * N;
-        std::copy(g_last + bd * N, g_last + (bd + 1) * N, adj.begin());
+        T* __restrict dA_acc = dA_rows + bd * N;
+        std::copy(g_last + bd * N, g_last + (bd + 1) * N, adj);
         T dD_acc = T(0), dbias_acc = T(0);
         for (int64_t l = L - 1; l >= 0; --l) {
           const int64_t i = bd * L + l;
-          const T* a = dA + i * N;
-          const T* bl = Bt + (b * L + l) * N;
-          const T* cl = Ct + (b * L + l) * N;
-          const T* h = h_all + i * N;
-          const T* h_prev = l > 0 ? h - N : zero.data();
-          T* dbl = dBt + (b * L + l) * N;
-          T* dcl = dCt + (b * L + l) * N;
+          const T* __restrict a = dA + i * N;
+          const T* __restrict bl = Bt + (b * L + l) * N;
+          const T* __restrict cl = Ct + (b * L + l) * N;
+          const T* __restrict h = h_all + i * N;
+          const T* __restrict h_prev = l > 0 ? h - N : zero.data();
+          T* __restrict dbl = dBt + (b * L + l) * N;
+          T* __restrict dcl = dCt + (b * L + l) * N;
           // out = ys SiLU(z), ys = C h + D u.
           const T dys = g_out[i] * Silu(z[i]);
           dz[i] = g_out[i] * ys_all[i] * SiluDerivative(z[i]);
@@ -209,16 +241,14 @@ void BackwardLoops(const ScanShape& s, const ScanInputs& in, const torch::Tensor
           const T dtl = dt[i], ul = u[i];
           T du_l = dys * d_skip[d];
           T ddt = T(0);
-          // h_l = exp(Δ_l A) h_{l-1} + Δ_l B_l u_l.
+          // h_l = exp(Δ_l A) h_{l-1} + Δ_l B_l u_l. The per-state terms
+          // vectorise; the sums over n for Δ and u stay in index order, so
+          // the bits are those of one loop doing both.
+          BackwardStep(N, dys, dtl, ul, h, h_prev, a, a_d, bl, cl, adj, dcl, dA_acc, dbl, ddt_terms,
+                       du_terms);
           for (int64_t n = 0; n < N; ++n) {
-            dcl[n] += dys * h[n];
-            const T gh = adj[n] + dys * cl[n];
-            const T g_decay = gh * h_prev[n] * a[n];  // dLoss/d(Δ_l A_n)
-            ddt += g_decay * a_d[n] + gh * bl[n] * ul;
-            dA_acc[n] += g_decay * dtl;
-            dbl[n] += gh * dtl * ul;
-            du_l += gh * dtl * bl[n];
-            adj[n] = gh * a[n];
+            ddt += ddt_terms[n];
+            du_l += du_terms[n];
           }
           du[i] = du_l;
           const T dpre = ddt * SoftplusDerivative(pre[i]);
