@@ -19,7 +19,6 @@ namespace {
 
 using core::kPi;
 using core::kSpeedOfLight_mps;
-constexpr double kWavelengthNm = 905.0;
 
 // Rosette prism rates. Their ratio is the golden ratio, the "most
 // irrational" number, so the rose never closes; f1 + f2 = 196.8 Hz gives
@@ -32,19 +31,12 @@ constexpr double kMid360AzimuthHz = 16.180339887498949;    // 10 x golden ratio
 constexpr double kMid360ElevationHz = 2236.0679774997897;  // 1000 x sqrt(5)
 
 // Rain (LISA, Kilic et al. 2021): Marshall-Palmer and water at 905 nm.
-constexpr double kMarshallPalmerN0 = 8000.0;  // m^-3 mm^-1
-constexpr double kWaterFresnel = 0.0199;      // ((1.328 - 1) / (1.328 + 1))^2
-constexpr double kMinDropMm = 0.05;           // LISA's smallest sampled drop; MP is wrong below
-constexpr double kMaxDropMm = 10.0;           // drops break up above ~8 mm
-
-// Fog backscatter per unit visibility (Rasshofer et al. 2011, as Hahner uses).
-constexpr double kFogBackscatterTimesVisibility = 0.046;  // sr^-1
+constexpr double kMinDropMm = 0.05;  // LISA's smallest sampled drop; MP is wrong below
+constexpr double kMaxDropMm = 10.0;  // drops break up above ~8 mm
 
 // Faded fog echoes more than this many times their mean have probability
 // e^-60: the fog profile is tabulated only where it could still be detected.
 constexpr double kMaxFade = 60.0;
-
-double MarshallPalmerLambdaPerMm(double rain_mm_h) { return 4.1 * std::pow(rain_mm_h, -0.21); }
 
 // Transmitter/receiver overlap xi(r) of a biaxial sensor (Hahner et al.,
 // linear between r_1 and r_2).
@@ -141,33 +133,6 @@ void Require(bool ok, const std::string& message) {
 }
 
 }  // namespace
-
-double FogExtinctionPerM(double visibility_m) {
-  const double v_km = visibility_m / 1000.0;
-  double q = 0.0;  // Kim et al. 2001: scattering in dense fog is wavelength independent
-  if (v_km > 50.0)
-    q = 1.6;
-  else if (v_km > 6.0)
-    q = 1.3;
-  else if (v_km > 1.0)
-    q = 0.16 * v_km + 0.34;
-  else if (v_km > 0.5)
-    q = v_km - 0.5;
-  return 3.912 / visibility_m * std::pow(kWavelengthNm / 550.0, -q);
-}
-
-double RainExtinctionPerM(double rain_mm_h) {
-  if (rain_mm_h <= 0.0) return 0.0;
-  const double lambda = MarshallPalmerLambdaPerMm(rain_mm_h);
-  // 2 * (pi/4) * N0 * integral D^2 e^{-Lambda D} dD = pi N0 / Lambda^3, mm^2 m^-3 -> m^-1.
-  return kPi * kMarshallPalmerN0 / (lambda * lambda * lambda) * 1e-6;
-}
-
-double AtmosphericExtinctionPerM(const core::WeatherConfig& weather) {
-  double alpha = RainExtinctionPerM(weather.rain_mm_h);
-  if (weather.fog_visibility_m) alpha += FogExtinctionPerM(*weather.fog_visibility_m);
-  return alpha;
-}
 
 Lidar::Lidar(const LidarConfig& config, RaycastScene& scene) : config_(config), scene_(scene) {
   const LidarConfig& c = config_;

@@ -94,6 +94,7 @@
 #include <vector>
 
 #include "sensors/frames.h"
+#include "sensors/lidar_atmosphere.h"
 #include "sensors/lidar_config.h"
 #include "sensors/raycast_scene.h"
 #include "sim/core/rng.h"
@@ -101,10 +102,7 @@
 
 namespace uavsim::sensors {
 
-// Extinction coefficients at 905 nm, in 1/m (formulas above).
-double FogExtinctionPerM(double visibility_m);
-double RainExtinctionPerM(double rain_mm_h);
-double AtmosphericExtinctionPerM(const core::WeatherConfig& weather);
+// Extinction coefficients at 905 nm (formulas above): sensors/lidar_atmosphere.h.
 
 // One beam as Capture casts it: the world-frame ray (unit direction, so t is
 // in metres) and its firing time after the frame's start.

@@ -131,6 +131,10 @@ std::map<std::string, NodeTraffic> TrafficByModality(
     t.raw_bytes += node->traffic().raw_bytes;
     t.preprocessed_bytes += node->traffic().preprocessed_bytes;
     t.compressed_bytes += node->traffic().compressed_bytes;
+    t.target_frames += node->traffic().target_frames;
+    t.sent_frames += node->traffic().sent_frames;
+    t.sent_on_target += node->traffic().sent_on_target;
+    t.target_frames_sent += node->traffic().target_frames_sent;
   }
   return traffic;
 }

@@ -36,6 +36,13 @@ core::Json Metrics(const FinishedRun& run) {
   core::Json modalities = core::Json::object();
   for (const auto& [m, traffic] : run.traffic) modalities[m] = {{"frames", traffic.frames}};
   run.edge.receiver().WriteMetrics(modalities);
+  // Simulator ground truth on the point nodes' selection (sim/sensing_node.h TargetSight).
+  for (const auto& [m, traffic] : run.traffic)
+    if (m != "camera" && traffic.frames > 0)
+      modalities[m]["target_sight"] = {{"frames_seeing_target", traffic.target_frames},
+                                       {"frames_sent", traffic.sent_frames},
+                                       {"sent_holding_target", traffic.sent_on_target},
+                                       {"seeing_and_sent", traffic.target_frames_sent}};
   metrics["modalities"] = modalities;
   core::Json rates = core::Json::object();
   const double duration_s = run.scenario.duration_s;

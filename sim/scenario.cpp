@@ -465,10 +465,40 @@ Scenario LoadScenario(const std::string& path, const std::vector<std::string>& o
 
 Json ResolvedJson(const Scenario& s) { return core::ToJson(s); }
 
+namespace {
+
+// Pre-processing keys added after models were shipped, with their defaults:
+// at the default a key is left out of the layout hash, so that models
+// trained before it existed still match (they were trained with its default).
+const std::vector<std::pair<const char*, core::Json>>& LaterPreprocessKeys() {
+  static const std::vector<std::pair<const char*, core::Json>> keys = [] {
+    const pipeline::PreprocessConfig d;
+    return std::vector<std::pair<const char*, core::Json>>{
+        {"/lidar/weather_echo_rejection", d.lidar.weather_echo_rejection},
+        {"/lidar/fog_echo_margin", d.lidar.fog_echo_margin},
+        {"/lidar/rain_echo_margin", d.lidar.rain_echo_margin},
+        {"/radar/selection", pipeline::RadarSelectionName(d.radar.selection)},
+        {"/radar/rain_doppler_rejection", d.radar.rain_doppler_rejection},
+        {"/radar/rain_doppler_margin_mps", d.radar.rain_doppler_margin_mps},
+        {"/radar/persistence_frames", d.radar.persistence_frames},
+        {"/radar/min_support", d.radar.min_support},
+        {"/radar/gate_m", d.radar.gate_m},
+        {"/radar/max_speed_mps", d.radar.max_speed_mps}};
+  }();
+  return keys;
+}
+
+}  // namespace
+
 std::string LayoutHash(const Scenario& s) {
   const core::Json j = ResolvedJson(s);
-  const std::string text =
-      j.at("world").dump() + j.at("nodes").dump() + j.at("pipeline").at("preprocess").dump();
+  core::Json preprocess = j.at("pipeline").at("preprocess");
+  for (const auto& [pointer, value] : LaterPreprocessKeys()) {
+    const core::Json::json_pointer p(pointer);
+    if (preprocess.contains(p) && preprocess.at(p) == value)
+      preprocess.at(p.parent_pointer()).erase(p.back());
+  }
+  const std::string text = j.at("world").dump() + j.at("nodes").dump() + preprocess.dump();
   std::uint64_t h = 1469598103934665603ull;  // FNV-1a 64
   for (unsigned char ch : text) h = (h ^ ch) * 1099511628211ull;
   char buf[17];

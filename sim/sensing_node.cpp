@@ -21,6 +21,55 @@ namespace {
 // weather, the world, its own view of the world's scene (so that nodes may
 // capture on threads of their own), where it records (null: nowhere) and
 // where it times its work (null: nowhere).
+constexpr double kLidarTargetRadiusM = 1.0;
+constexpr double kRadarTargetRadiusM = 3.0;
+
+bool Near(const Eigen::Vector3d& p, const Eigen::Vector3d& q, double radius_m) {
+  return (p - q).squaredNorm() <= radius_m * radius_m;
+}
+
+// Whether an observation's points (x, y, z first) hold one within the
+// radius of where the target was at `time_of(i)`.
+template <class TimeOf>
+bool HoldsTarget(const pipeline::PointObservation& obs, const core::Trajectory& target,
+                 double radius_m, TimeOf time_of) {
+  for (std::size_t i = 0; i < obs.count(); ++i) {
+    const float* v = &obs.values[i * static_cast<std::size_t>(obs.channels)];
+    if (Near({v[0], v[1], v[2]}, target.StateAt(time_of(i)).position_m, radius_m)) return true;
+  }
+  return false;
+}
+
+TargetSight LidarSight(const WorldModel& world, const sensors::PointCloudFrame& frame,
+                       const pipeline::PointObservation& sent) {
+  TargetSight s;
+  const core::Trajectory& target = world.target();
+  for (const sensors::LidarPoint& p : frame.points)
+    if (Near({p.x_m, p.y_m, p.z_m}, target.StateAt(frame.t_start_s + p.t_offset_s).position_m,
+             kLidarTargetRadiusM)) {
+      s.frame_saw = true;
+      break;
+    }
+  // The observation keeps no per-point times; its t_s is their mean.
+  s.sent_holds =
+      HoldsTarget(sent, target, kLidarTargetRadiusM, [&](std::size_t) { return sent.t_s; });
+  return s;
+}
+
+TargetSight RadarSight(const WorldModel& world, const sensors::RadarFrame& frame,
+                       const pipeline::PointObservation& sent) {
+  TargetSight s;
+  const Eigen::Vector3d truth = world.target().StateAt(frame.t_capture_s).position_m;
+  for (const sensors::RadarPoint& p : frame.points)
+    if (Near({p.x_m, p.y_m, p.z_m}, truth, kRadarTargetRadiusM)) {
+      s.frame_saw = true;
+      break;
+    }
+  s.sent_holds = HoldsTarget(sent, world.target(), kRadarTargetRadiusM,
+                             [&](std::size_t) { return frame.t_capture_s; });
+  return s;
+}
+
 struct SensorContext {
   SensorContext(const std::string& id, const core::WeatherConfig& weather, WorldModel& world,
                 Recorder* recorder, core::WallProfile* profile)
@@ -64,7 +113,7 @@ class CameraNodeSensor final : public NodeSensor {
     }
     return [this, frame] {
       const core::WallProfile::Scope timing(c_.preprocess);
-      NodeFrame out{frame->RawBytes(), {}, {}};
+      NodeFrame out{frame->RawBytes(), {}, {}, {}};
       out.content.camera = preprocess_.Process(*frame);
       if (c_.recorder)
         out.record = [recorder = c_.recorder, &id = c_.id, frame] {
@@ -84,7 +133,7 @@ class LidarNodeSensor final : public NodeSensor {
   LidarNodeSensor(const NodeConfig& node, const Scenario& s, SensorContext c)
       : c_(std::move(c)),
         lidar_(node.sensor.lidar, *c_.scene),
-        preprocess_(node.sensor.lidar, s.pipeline.preprocess) {}
+        preprocess_(node.sensor.lidar, s.pipeline.preprocess, c_.weather) {}
 
  private:
   // The LiDAR poses the scene at each point's own time.
@@ -96,8 +145,9 @@ class LidarNodeSensor final : public NodeSensor {
     }
     return [this, frame] {
       const core::WallProfile::Scope timing(c_.preprocess);
-      NodeFrame out{frame->RawBytes(), {}, {}};
+      NodeFrame out{frame->RawBytes(), {}, {}, {}};
       out.content.points = preprocess_.Process(*frame);
+      out.sight = LidarSight(c_.world, *frame, *out.content.points);
       if (c_.recorder)
         out.record = [recorder = c_.recorder, &id = c_.id, frame] {
           recorder->RecordLidar(id, *frame);
@@ -119,7 +169,7 @@ class RadarNodeSensor final : public NodeSensor {
       : c_(std::move(c)),
         radar_(node.sensor.radar, *c_.scene),
         processor_(node.sensor.radar),
-        preprocess_(node.sensor.radar, s.pipeline.preprocess) {
+        preprocess_(node.sensor.radar, s.pipeline.preprocess, c_.weather) {
     radar_.set_static_cache(s.execution.static_cache);
   }
 
@@ -139,8 +189,9 @@ class RadarNodeSensor final : public NodeSensor {
     }
     return [this, frame, raw_bytes] {
       const core::WallProfile::Scope timing(c_.preprocess);
-      NodeFrame out{raw_bytes, {}, {}};
+      NodeFrame out{raw_bytes, {}, {}, {}};
       out.content.points = preprocess_.Process(*frame);
+      out.sight = RadarSight(c_.world, *frame, *out.content.points);
       if (c_.recorder)
         out.record = [recorder = c_.recorder, &id = c_.id, frame] {
           recorder->RecordRadar(id, *frame);
@@ -312,6 +363,12 @@ void SensingNode::OnFrame(core::SimTime t) {
   const std::uint32_t bytes_sent = found ? wiring_.message_bytes : channel::kMessageHeaderBytes;
   ++traffic_.frames;
   traffic_.raw_bytes += frame.raw_bytes;
+  if (frame.sight) {
+    traffic_.target_frames += frame.sight->frame_saw;
+    traffic_.sent_frames += found;
+    traffic_.sent_on_target += found && frame.sight->sent_holds;
+    traffic_.target_frames_sent += frame.sight->frame_saw && found && frame.sight->sent_holds;
+  }
   traffic_.preprocessed_bytes += content->PreprocessedBytes();
   traffic_.compressed_bytes += bytes_sent;
   channel::Message m;

@@ -61,9 +61,20 @@ struct NodeContent {
 // frame order, one at a time; pre-processings likewise). The public methods
 // keep the checks; each sensor's work is its private DoAcquire (ns-3's
 // CalcRxPower / DoCalcRxPower).
+// Whether a point frame saw the target and whether what the node sends
+// holds it: simulator ground truth for the run's diagnostics (metrics.json's
+// target_* counts), never seen by the node or the edge. A point "holds the
+// target" within kTargetRadiusM of its modality of the target's position at
+// the point's own time (LiDAR 1 m, radar 3 m).
+struct TargetSight {
+  bool frame_saw = false;   // some raw return within the radius
+  bool sent_holds = false;  // the pre-processed observation has such a point
+};
+
 struct NodeFrame {
-  std::uint64_t raw_bytes = 0;  // the raw frame (or radar cube) as the sensor produced it
-  NodeContent content;          // its pre-processed content
+  std::uint64_t raw_bytes = 0;       // the raw frame (or radar cube) as the sensor produced it
+  NodeContent content;               // its pre-processed content
+  std::optional<TargetSight> sight;  // point modalities only
   // Writes the raw frame to the run's recorder (empty: not recorded). The
   // node calls it on the event loop's thread, in capture order, so frames
   // are numbered as without threads.
@@ -101,6 +112,10 @@ struct NodeTraffic {
   std::uint64_t raw_bytes = 0;
   std::uint64_t preprocessed_bytes = 0;
   std::uint64_t compressed_bytes = 0;  // what the uplink carried (headers included)
+  // Point modalities (TargetSight): frames whose raw data saw the target,
+  // frames that sent something, of those the ones holding the target, and
+  // frames that saw the target and sent it.
+  std::uint64_t target_frames = 0, sent_frames = 0, sent_on_target = 0, target_frames_sent = 0;
 };
 
 class SensingNode {

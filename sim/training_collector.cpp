@@ -15,7 +15,10 @@ void TrainingCollector::OnFrame(const SensingNode& node, double t_s, NodeContent
   sample.modality = node.modality();
   sample.node = node.index();
   sample.t_s = t_s;
-  sample.truth_m = world_.target().StateAt(t_s).position_m;
+  // Labelled at the observation's own time stamp (a LiDAR sweep's: when the
+  // kept points were swept), where the target was when it was seen.
+  const double t_seen_s = content.points ? content.points->t_s : content.camera->t_s;
+  sample.truth_m = world_.target().StateAt(t_seen_s).position_m;
   sample.camera = content.camera;
   sample.points = content.points;
   content.sample = episode_.samples.size();

@@ -1,7 +1,7 @@
 // Training data from a run (sim/train.h): observes the sensing nodes' frames,
 // every message's fate at the edge (on time, late, lost) and the windows'
 // ends, and fills an Episode (pipeline/training/dataset.h): every frame whose
-// pre-processing found something, with the truth at its capture time, when
+// pre-processing found something, with the truth at the observation's own time stamp, when
 // and whether it reached the edge, and the truth at every window's end up to
 // the run's end. A sample whose message is neither arrived nor lost when the
 // run ends keeps the fate kInFlight and no arrival time.

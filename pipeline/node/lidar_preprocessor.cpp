@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "pipeline/node/point_clustering.h"
+#include "sensors/lidar_atmosphere.h"
 
 namespace uavsim::pipeline {
 namespace {
@@ -25,8 +26,22 @@ std::uint64_t Pack(std::int64_t v) {
 }  // namespace
 
 LidarPreprocessor::LidarPreprocessor(const sensors::LidarConfig& sensor,
-                                     const PreprocessConfig& config)
-    : config_(config.lidar), raw_(config.LidarRaw()), sensor_position_w_(sensor.pose.position_m) {}
+                                     const PreprocessConfig& config,
+                                     const core::WeatherConfig& weather)
+    : config_(config.lidar),
+      sensor_(sensor),
+      weather_(weather),
+      reject_weather_(config.lidar.weather_echo_rejection && !config.LidarRaw() &&
+                      (weather.fog_visibility_m || weather.rain_mm_h > 0.0)),
+      raw_(config.LidarRaw()),
+      sensor_position_w_(sensor.pose.position_m) {}
+
+bool LidarPreprocessor::IsWeatherEcho(const sensors::LidarPoint& p) const {
+  const double r = (Eigen::Vector3d(p.x_m, p.y_m, p.z_m) - sensor_position_w_).norm();
+  const double power = sensors::LidarPowerOfIntensity(sensor_, p.intensity);
+  return power < config_.fog_echo_margin * sensors::FogEchoMeanPower(sensor_, weather_, r) ||
+         power <= config_.rain_echo_margin * sensors::RainEchoMaxPower(sensor_, weather_, r);
+}
 
 void LidarPreprocessor::Reset() {
   frames_seen_ = 0;
@@ -56,6 +71,7 @@ void LidarPreprocessor::Learn(const sensors::PointCloudFrame& frame) {
   for (const sensors::LidarPoint& p : frame.points) {
     int ix, iy, iz;
     if (!VoxelOf(p, ix, iy, iz)) continue;
+    if (reject_weather_ && IsWeatherEcho(p)) continue;
     Occupancy& o = occupancy_[VoxelKey(ix, iy, iz)];
     if (o.last_frame == frames_seen_) continue;
     o.last_frame = frames_seen_;
@@ -109,7 +125,8 @@ PointObservation LidarPreprocessor::Process(const sensors::PointCloudFrame& fram
   } else {
     std::vector<std::size_t> dynamic;
     for (std::size_t i = 0; i < frame.points.size(); ++i)
-      if (!IsStatic(frame.points[i])) dynamic.push_back(i);
+      if (!IsStatic(frame.points[i]) && !(reject_weather_ && IsWeatherEcho(frame.points[i])))
+        dynamic.push_back(i);
     if (config_.clusters_kept == 0) {
       kept = std::move(dynamic);
     } else {

@@ -10,8 +10,17 @@
 //             static_neighbourhood, one of the 26 around it) is static;
 //             DBSCAN (cluster_eps_m, cluster_min_points) of the dynamic
 //             points, the clusters_kept largest kept (0: every dynamic point).
-//   raw       (config.LidarRaw()) no background, no clustering, from the
-//             first scan on.
+//   weather   (lidar.weather_echo_rejection, ours) before both: a return is
+//             dropped when fog or rain backscatter at its range could have
+//             produced its power, i.e. when P < fog_echo_margin S_fog(r) or
+//             P <= rain_echo_margin P_drop(r), with P the power its
+//             intensity stands for (saturated returns are kept), r its
+//             distance from the sensor and S_fog, P_drop the mean fog echo
+//             and the largest raindrop echo of sensors/lidar_atmosphere.h
+//             for the scenario's weather (the node is taken to know the
+//             visibility and rain rate, as from a visibility meter).
+//   raw       (config.LidarRaw()) no background, no clustering, no weather
+//             rejection, from the first scan on.
 // Either way at most PointObservation::kMaxPoints points, evenly spaced in
 // the frame's order if there are more (EvenlySpacedIndices), in the frame's
 // order. Channels 4: x, y, z (world, metres), intensity.
@@ -37,12 +46,14 @@
 #include "pipeline/node/preprocess_config.h"
 #include "sensors/frames.h"
 #include "sensors/lidar_config.h"
+#include "sim/core/weather.h"
 
 namespace uavsim::pipeline {
 
 class LidarPreprocessor {
  public:
-  LidarPreprocessor(const sensors::LidarConfig& sensor, const PreprocessConfig& config);
+  LidarPreprocessor(const sensors::LidarConfig& sensor, const PreprocessConfig& config,
+                    const core::WeatherConfig& weather = {});
 
   PointObservation Process(const sensors::PointCloudFrame& frame);
 
@@ -63,8 +74,13 @@ class LidarPreprocessor {
   bool VoxelOf(const sensors::LidarPoint& p, int& ix, int& iy, int& iz) const;
   bool IsStatic(const sensors::LidarPoint& p) const;
   void Learn(const sensors::PointCloudFrame& frame);
+  // Whether the return could be a fog or rain echo (see above).
+  bool IsWeatherEcho(const sensors::LidarPoint& p) const;
 
   LidarPreprocessConfig config_;
+  sensors::LidarConfig sensor_;
+  core::WeatherConfig weather_;
+  bool reject_weather_;
   bool raw_;
   Eigen::Vector3d sensor_position_w_;
   int frames_seen_ = 0;

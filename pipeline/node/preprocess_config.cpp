@@ -36,6 +36,13 @@ void Visit(V& v, LidarPreprocessConfig& c) {
   v("cluster_eps_m", c.cluster_eps_m, Rule::Positive(1000.0));
   v("cluster_min_points", c.cluster_min_points, Rule::Range(1, 100000));
   v("clusters_kept", c.clusters_kept, Rule::Range(0, 1000));
+  v("weather_echo_rejection", c.weather_echo_rejection);
+  v("fog_echo_margin", c.fog_echo_margin, Rule::Range(1.0, 1000.0));
+  v("rain_echo_margin", c.rain_echo_margin, Rule::Range(1.0, 1000.0));
+}
+
+const char* RadarSelectionName(RadarSelection s) {
+  return s == RadarSelection::kLargest ? "largest" : "persistent";
 }
 
 template <class V>
@@ -45,6 +52,14 @@ void Visit(V& v, RadarPreprocessConfig& c) {
   v("cluster_min_points", c.cluster_min_points, Rule::Range(1, 100000));
   v("velocity_weight_s", c.velocity_weight_s, Rule::NonNegative(1000.0));
   v("clusters_kept", c.clusters_kept, Rule::Range(0, 1000));
+  v.Enum("selection", c.selection,
+         {{"largest", RadarSelection::kLargest}, {"persistent", RadarSelection::kPersistent}});
+  v("rain_doppler_rejection", c.rain_doppler_rejection);
+  v("rain_doppler_margin_mps", c.rain_doppler_margin_mps, Rule::NonNegative(100.0));
+  v("persistence_frames", c.persistence_frames, Rule::Range(1, 1000));
+  v("min_support", c.min_support, Rule::Range(0, 1000));
+  v("gate_m", c.gate_m, Rule::Positive(1000.0));
+  v("max_speed_mps", c.max_speed_mps, Rule::NonNegative(1000.0));
 }
 
 template <class V>

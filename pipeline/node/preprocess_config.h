@@ -66,7 +66,24 @@ struct LidarPreprocessConfig {
   double cluster_eps_m = 1.0;
   int cluster_min_points = 1;
   int clusters_kept = 1;
+  // Weather echoes (ours, off by default until the shipped models are
+  // retrained on it; the paper's background subtraction keeps them):
+  // a return whose received power fog or rain backscatter at its range could
+  // reach is not the target (lidar_preprocessor.h). Fog echoes fade
+  // exponentially (speckle), so one reaches fog_echo_margin times its mean
+  // with probability e^-margin; a raindrop returns at most the power of a
+  // drop filling the beam, and rain_echo_margin covers the range noise.
+  bool weather_echo_rejection = false;
+  double fog_echo_margin = 20.0;
+  double rain_echo_margin = 1.2;
 };
+
+enum class RadarSelection {
+  kLargest,     // the clusters_kept largest (paper Sec. IV-A)
+  kPersistent,  // the clusters_kept best supported by the previous frames (ours)
+};
+// "largest", "persistent".
+const char* RadarSelectionName(RadarSelection s);
 
 struct RadarPreprocessConfig {
   bool raw = false;
@@ -76,6 +93,23 @@ struct RadarPreprocessConfig {
   int cluster_min_points = 1;
   double velocity_weight_s = 0.0;
   int clusters_kept = 1;
+  // Which clusters are kept (radar_preprocessor.h): "largest" (the paper,
+  // the default until the shipped models are retrained on ours)
+  // or "persistent" (ours): the clusters_kept with the most support among
+  // the previous persistence_frames frames' clusters (a centroid within
+  // gate_m + max_speed_mps times the frames' time apart), larger first on
+  // ties; clusters supported by fewer than min_support frames are not sent.
+  RadarSelection selection = RadarSelection::kLargest;
+  // Rain's Doppler (ours, off by default as above; the paper: "the Doppler component can be used to
+  // filter out spurious reflections"): in rain, a detection whose radial
+  // velocity is that of drops falling at 2 to 9.65 m/s seen along its
+  // direction (within rain_doppler_margin_mps) is dropped before clustering.
+  bool rain_doppler_rejection = false;
+  double rain_doppler_margin_mps = 0.5;
+  int persistence_frames = 5;
+  int min_support = 1;
+  double gate_m = 2.0;
+  double max_speed_mps = 20.0;
 };
 
 struct PreprocessConfig {

@@ -1,17 +1,86 @@
 #include "pipeline/node/radar_preprocessor.h"
 
+#include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <vector>
 
 #include "pipeline/node/point_clustering.h"
 
 namespace uavsim::pipeline {
+namespace {
+
+// Centroid (x, y, z) of every cluster of the valid detections.
+std::vector<Eigen::Vector3d> Centroids(const sensors::RadarFrame& frame,
+                                       const std::vector<std::size_t>& valid,
+                                       const DbscanClusters& clusters) {
+  std::vector<Eigen::Vector3d> sum(clusters.size.size(), Eigen::Vector3d::Zero());
+  for (std::size_t k = 0; k < valid.size(); ++k) {
+    const int id = clusters.label[k];
+    if (id == DbscanClusters::kNoise) continue;
+    const sensors::RadarPoint& p = frame.points[valid[k]];
+    sum[static_cast<std::size_t>(id)] += Eigen::Vector3d(p.x_m, p.y_m, p.z_m);
+  }
+  for (std::size_t id = 0; id < sum.size(); ++id)
+    sum[id] /= static_cast<double>(std::max<std::size_t>(1, clusters.size[id]));
+  return sum;
+}
+
+}  // namespace
 
 RadarPreprocessor::RadarPreprocessor(const sensors::FmcwRadarConfig& sensor,
-                                     const PreprocessConfig& config)
-    : config_(config.radar), raw_(config.RadarRaw()), sensor_position_w_(sensor.pose.position_m) {}
+                                     const PreprocessConfig& config,
+                                     const core::WeatherConfig& weather)
+    : config_(config.radar),
+      raw_(config.RadarRaw()),
+      reject_rain_(config.radar.rain_doppler_rejection && !config.RadarRaw() &&
+                   weather.rain_mm_h > 0.0),
+      sensor_position_w_(sensor.pose.position_m) {}
 
-PointObservation RadarPreprocessor::Process(const sensors::RadarFrame& frame) const {
+bool RadarPreprocessor::IsRainEcho(const sensors::RadarPoint& p) const {
+  // Atlas et al. 1973: v_t(D) = 9.65 - 10.3 exp(-0.6 D); 2 m/s at D = 0.5 mm.
+  constexpr double kSlowestMps = 2.0, kFastestMps = 9.65;
+  const Eigen::Vector3d d = Eigen::Vector3d(p.x_m, p.y_m, p.z_m) - sensor_position_w_;
+  const double n = d.norm();
+  if (!(n > 0.0)) return false;
+  const double u_z = d.z() / n, m = config_.rain_doppler_margin_mps;
+  const double a = -kFastestMps * u_z, b = -kSlowestMps * u_z;
+  return p.radial_velocity_mps >= std::min(a, b) - m && p.radial_velocity_mps <= std::max(a, b) + m;
+}
+
+std::vector<int> RadarPreprocessor::Choose(const sensors::RadarFrame& frame,
+                                           const std::vector<std::size_t>& valid,
+                                           const DbscanClusters& clusters) {
+  if (config_.selection == RadarSelection::kLargest)
+    return LargestClusters(clusters, config_.clusters_kept);
+  const std::vector<Eigen::Vector3d> centroids = Centroids(frame, valid, clusters);
+  std::vector<int> support(centroids.size(), 0);
+  for (std::size_t id = 0; id < centroids.size(); ++id)
+    for (const PastFrame& past : history_) {
+      const double gate = config_.gate_m + config_.max_speed_mps * (frame.t_capture_s - past.t_s);
+      for (const Eigen::Vector3d& c : past.centroids)
+        if ((c - centroids[id]).squaredNorm() <= gate * gate) {
+          ++support[id];
+          break;
+        }
+    }
+  history_.push_back({frame.t_capture_s, centroids});
+  while (static_cast<int>(history_.size()) > config_.persistence_frames) history_.pop_front();
+
+  std::vector<int> order(centroids.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
+    if (support[a] != support[b]) return support[a] > support[b];
+    return clusters.size[a] > clusters.size[b];
+  });
+  std::vector<int> out;
+  for (int id : order)
+    if (static_cast<int>(out.size()) < config_.clusters_kept && support[id] >= config_.min_support)
+      out.push_back(id);
+  return out;
+}
+
+PointObservation RadarPreprocessor::Process(const sensors::RadarFrame& frame) {
   PointObservation obs;
   obs.t_s = frame.t_capture_s;
   obs.channels = 5;
@@ -21,7 +90,8 @@ PointObservation RadarPreprocessor::Process(const sensors::RadarFrame& frame) co
   for (std::size_t i = 0; i < frame.points.size(); ++i) {
     const sensors::RadarPoint& p = frame.points[i];
     if (std::isfinite(p.x_m) && std::isfinite(p.y_m) && std::isfinite(p.z_m) &&
-        std::isfinite(p.radial_velocity_mps) && std::isfinite(p.snr_db))
+        std::isfinite(p.radial_velocity_mps) && std::isfinite(p.snr_db) &&
+        !(reject_rain_ && IsRainEcho(p)))
       valid.push_back(i);
   }
 
@@ -42,7 +112,7 @@ PointObservation RadarPreprocessor::Process(const sensors::RadarFrame& frame) co
     const DbscanClusters clusters =
         Dbscan(features, dims, config_.cluster_eps_m, config_.cluster_min_points);
     std::vector<char> keep_cluster(clusters.size.size(), 0);
-    for (int id : LargestClusters(clusters, config_.clusters_kept)) keep_cluster[id] = 1;
+    for (int id : Choose(frame, valid, clusters)) keep_cluster[id] = 1;
     for (std::size_t k = 0; k < valid.size(); ++k) {
       const int id = clusters.label[k];
       if (id != DbscanClusters::kNoise && keep_cluster[id]) kept.push_back(valid[k]);

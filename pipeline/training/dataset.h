@@ -44,9 +44,11 @@ struct Sample {
   // on_time == (fate == SampleFate::kOnTime) for simulated samples.
   SampleFate fate = SampleFate::kInFlight;
   double t_arrival_s = std::numeric_limits<double>::quiet_NaN();
-  Eigen::Vector3d truth_m = Eigen::Vector3d::Zero();  // target position at t_s
-  std::optional<CameraObservation> camera;            // set for the camera
-  std::optional<PointObservation> points;             // set for LiDAR and radar
+  // Target position at the observation's own time stamp (PointObservation::t_s,
+  // CameraObservation::t_s; a LiDAR sweep's differs from t_s).
+  Eigen::Vector3d truth_m = Eigen::Vector3d::Zero();
+  std::optional<CameraObservation> camera;  // set for the camera
+  std::optional<PointObservation> points;   // set for LiDAR and radar
 };
 
 // An episode's samples, shared between copies of the episode until one of

@@ -209,3 +209,26 @@ TEST_CASE("Scenario: a mesh city is loaded and checked by validation, the line n
       Json::parse(R"({"world": {"city": {"type": "mesh", "path": "far.obj", "scale": 0.1}}})");
   CHECK_NOTHROW(ScenarioFromJson(scaled, "s.json", dir));
 }
+
+// The layout hash says whether a model was trained on this world, these nodes
+// and this pre-processing; keys added since keep the hash of a scenario at
+// their defaults, so the shipped models (trained before) still match.
+TEST_CASE("Scenario: pre-processing keys added later keep shipped models' layout hash", "[sim]") {
+  for (const char* name : {"default", "mmaud_twin"}) {
+    INFO(name);
+    const Scenario s = LoadScenario(kScenarios + "/" + name + ".json");
+    const std::string model = std::string(UAVSIM_SOURCE_DIR) + "/models/" +
+                              (std::string(name) == "default" ? "default" : "mmaud_twin") +
+                              "/model.json";
+    const Json manifest = uavsim::core::LoadJsonFile(model);
+    CHECK(uavsim::sim::LayoutHash(s) == manifest.at("layout_hash").get<std::string>());
+  }
+  const Scenario d = LoadScenario(kScenarios + "/default.json");
+  for (const char* set : {"/pipeline/preprocess/radar/selection=\"persistent\"",
+                          "/pipeline/preprocess/lidar/weather_echo_rejection=true",
+                          "/pipeline/preprocess/radar/gate_m=3"}) {
+    INFO(set);
+    CHECK(uavsim::sim::LayoutHash(LoadScenario(kScenarios + "/default.json", {set})) !=
+          uavsim::sim::LayoutHash(d));
+  }
+}

@@ -2,6 +2,7 @@
 // a static scene (ground, a wall, a pole) sampled with range noise, and
 // boxes of points that move through it.
 #include <Eigen/Core>
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <vector>
@@ -204,6 +205,66 @@ TEST_CASE("LidarPreprocessor: raw variant subsamples the whole cloud from the fi
   PreprocessConfig all_raw;
   all_raw.raw = true;
   CHECK(LidarPreprocessor(Sensor(), all_raw).Process(frame).count() == 1024);
+}
+
+// One return at `range_m` straight ahead (+x) of the sensor, of received
+// power `power` (the LiDAR's normalised units: intensity = P * 5 m^2 at the
+// default 5 m saturation range).
+sensors::LidarPoint Return(double range_m, double power) {
+  const sensors::LidarConfig c = Sensor();
+  return {static_cast<float>(range_m), 0.0f, 1.5f,
+          static_cast<float>(std::min(1.0, power * c.saturation_range_m * c.saturation_range_m)),
+          0.05f};
+}
+
+// Closed forms of the LiDAR's weather echoes (sensors/lidar.h), written out
+// here rather than taken from sensors/lidar_atmosphere.h: the default 1 m to
+// 10 m linear overlap, 5 ns pulse.
+double Overlap(double r) { return std::clamp((r - 1.0) / 9.0, 0.0, 1.0); }
+double FogMean(double visibility_m, double alpha, double r) {
+  const double rho_v = M_PI * (0.046 / visibility_m) * 3e8 * 5e-9 / 2.0;
+  return rho_v * Overlap(r) * std::exp(-2.0 * alpha * r) / (r * r);
+}
+
+TEST_CASE("LidarPreprocessor: fog and rain echoes are dropped, hard targets kept", "[pipeline]") {
+  PreprocessConfig config;
+  config.lidar.weather_echo_rejection = true;
+  config.lidar.clusters_kept = 0;  // every dynamic point: each return is judged alone
+  const auto judge = [&](const core::WeatherConfig& w, const sensors::LidarPoint& p) {
+    LidarPreprocessor pre(Sensor(), config, w);
+    for (int k = 0; k < config.lidar.warmup_frames; ++k) pre.Process(sensors::PointCloudFrame{});
+    sensors::PointCloudFrame frame;
+    frame.points = {p};
+    return pre.Process(frame).count() == 1;  // kept
+  };
+  core::WeatherConfig fog;
+  fog.fog_visibility_m = 300.0;
+  const double alpha_fog = 3.912 / 300.0;  // Kim et al.: q = 0 below 500 m
+  // Fog echoes fade as Exp(1): 15 times the mean is a fog echo (kept only past 20).
+  CHECK_FALSE(judge(fog, Return(8.0, 15.0 * FogMean(300.0, alpha_fog, 8.0))));
+  CHECK(judge(fog, Return(8.0, 25.0 * FogMean(300.0, alpha_fog, 8.0))));
+  // A drone (10 % at 905 nm, the world's drone material) at 30 m, head-on:
+  // 0.1 e^{-2 alpha r} / r^2, hundreds of times the fog's mean there.
+  const double drone_30 = 0.1 * std::exp(-2.0 * alpha_fog * 30.0) / 900.0;
+  CHECK(drone_30 > 100.0 * FogMean(300.0, alpha_fog, 30.0));
+  CHECK(judge(fog, Return(30.0, drone_30)));
+  CHECK(judge(fog, Return(3.0, 10.0)));  // saturated: a hard target
+
+  core::WeatherConfig rain;
+  rain.rain_mm_h = 10.0;
+  const double lambda = 4.1 * std::pow(10.0, -0.21);  // Marshall-Palmer, 1/mm
+  const double alpha_rain = M_PI * 8000.0 / std::pow(lambda, 3) * 1e-6;
+  // A drop filling the beam at 4 m: Fresnel 0.0199 of a white target.
+  const double drop_4 = 0.0199 * Overlap(4.0) * std::exp(-2.0 * alpha_rain * 4.0) / 16.0;
+  CHECK_FALSE(judge(rain, Return(4.0, drop_4)));
+  CHECK_FALSE(judge(rain, Return(4.0, 0.3 * drop_4)));
+  CHECK(judge(rain, Return(4.0, 2.0 * drop_4)));
+
+  // In clear air, and with the switch off, nothing is a weather echo.
+  CHECK(judge(core::WeatherConfig{}, Return(8.0, 15.0 * FogMean(300.0, alpha_fog, 8.0))));
+  config.lidar.weather_echo_rejection = false;
+  CHECK(judge(fog, Return(8.0, FogMean(300.0, alpha_fog, 8.0))));
+  CHECK(judge(rain, Return(4.0, drop_4)));
 }
 
 }  // namespace

@@ -44,6 +44,13 @@ bool Near(const float* p, const Eigen::Vector3d& centre, double radius_m) {
   return (Eigen::Vector3d(p[0], p[1], p[2]) - centre).norm() < radius_m;
 }
 
+// The paper's selection: the largest clusters, frame by frame.
+PreprocessConfig Largest() {
+  PreprocessConfig c;
+  c.radar.selection = RadarSelection::kLargest;
+  return c;
+}
+
 sensors::FmcwRadarConfig Sensor() {
   sensors::FmcwRadarConfig c;
   c.pose.position_m = Eigen::Vector3d(-20.0, 5.0, 2.0);
@@ -55,7 +62,7 @@ TEST_CASE("RadarPreprocessor: of clusters of 30 and 5 points, the 30 are kept", 
   const Eigen::Vector3d uav(20.0, 10.0, 30.0), bird(12.0, 18.0, 25.0);
   const auto uav_points = Cluster(uav, 30, -4.0, rng);
   const auto bird_points = Cluster(bird, 5, 2.0, rng);
-  const RadarPreprocessor pre(Sensor(), PreprocessConfig{});
+  RadarPreprocessor pre(Sensor(), Largest());
   // The bird first: order must not matter.
   const PointObservation obs = pre.Process(Frame({bird_points, uav_points}));
   CHECK(obs.channels == 5);
@@ -74,7 +81,7 @@ TEST_CASE("RadarPreprocessor: velocity separates co-located clusters when weight
   const Eigen::Vector3d here(20.0, 10.0, 30.0);
   const auto fast = Cluster(here, 12, -6.0, rng);
   const auto slow = Cluster(here, 8, 1.0, rng);
-  PreprocessConfig config;
+  PreprocessConfig config = Largest();
   CHECK(RadarPreprocessor(Sensor(), config).Process(Frame({fast, slow})).count() == 20);
   config.radar.velocity_weight_s = 1.0;  // 7 m/s apart: 7 m in feature space
   const PointObservation obs = RadarPreprocessor(Sensor(), config).Process(Frame({fast, slow}));
@@ -85,13 +92,13 @@ TEST_CASE("RadarPreprocessor: velocity separates co-located clusters when weight
 TEST_CASE("RadarPreprocessor: at most 1024 points, raw keeps every detection", "[pipeline]") {
   core::RngStream rng(3, "preprocess_radar_test/cap");
   const auto big = Cluster({30.0, 0.0, 20.0}, 3000, -3.0, rng);
-  const RadarPreprocessor pre(Sensor(), PreprocessConfig{});
+  RadarPreprocessor pre(Sensor(), Largest());
   const PointObservation obs = pre.Process(Frame({big}));
   REQUIRE(obs.count() == 1024);
   for (std::size_t i : {std::size_t{0}, std::size_t{700}, std::size_t{1023}})
     CHECK(obs.values[5 * i] == big[i * big.size() / 1024].x_m);
 
-  PreprocessConfig raw;
+  PreprocessConfig raw = Largest();
   raw.radar.raw = true;
   const auto a = Cluster({20.0, 10.0, 30.0}, 60, -4.0, rng);
   const auto b = Cluster({-10.0, 40.0, 15.0}, 40, 2.0, rng);
@@ -108,10 +115,89 @@ TEST_CASE("RadarPreprocessor: deterministic", "[pipeline]") {
   const sensors::RadarFrame frame =
       Frame({Cluster({5.0, 5.0, 5.0}, 20, 1.0, rng), Cluster({9.0, 5.0, 5.0}, 20, 1.0, rng),
              Cluster({40.0, 5.0, 5.0}, 7, 1.0, rng)});
-  const RadarPreprocessor pre(Sensor(), PreprocessConfig{});
+  RadarPreprocessor pre(Sensor(), Largest());
   CHECK(pre.Process(frame).values == pre.Process(frame).values);
-  CHECK(RadarPreprocessor(Sensor(), PreprocessConfig{}).Process(frame).values ==
-        pre.Process(frame).values);
+  CHECK(RadarPreprocessor(Sensor(), Largest()).Process(frame).values == pre.Process(frame).values);
+}
+
+// A target moving 0.5 m a frame beside clutter that lands somewhere else
+// every frame, as rain clutter and noise detections do.
+TEST_CASE("RadarPreprocessor: persistent keeps the cluster seen frame after frame", "[pipeline]") {
+  core::RngStream rng(3, "preprocess_radar_test/persistent");
+  PreprocessConfig config;
+  config.radar.selection = RadarSelection::kPersistent;
+  RadarPreprocessor persistent(Sensor(), config);
+  RadarPreprocessor largest(Sensor(), Largest());
+  int persistent_on_target = 0, largest_on_target = 0, sent_first = -1;
+  for (int k = 0; k < 12; ++k) {
+    const Eigen::Vector3d uav(20.0 + 0.5 * k, 10.0, 30.0);
+    // 6 points of clutter, more than the target's 4, never twice near one place.
+    const Eigen::Vector3d clutter(rng.Uniform(-40, 40), rng.Uniform(20, 60), rng.Uniform(5, 40));
+    sensors::RadarFrame frame = Frame({Cluster(clutter, 6, 3.0, rng), Cluster(uav, 4, -2.0, rng)});
+    frame.t_capture_s = k / 15.0;
+    const PointObservation p = persistent.Process(frame);
+    const PointObservation l = largest.Process(frame);
+    if (p.count() > 0 && sent_first < 0) sent_first = k;
+    if (p.count() > 0 && Near(&p.values[0], uav, 2.0)) ++persistent_on_target;
+    if (l.count() > 0 && Near(&l.values[0], uav, 2.0)) ++largest_on_target;
+  }
+  CHECK(largest_on_target == 0);  // the paper's rule follows the clutter
+  CHECK(sent_first == 1);         // nothing has support in the first frame
+  CHECK(persistent_on_target == 11);
+}
+
+TEST_CASE("RadarPreprocessor: persistent's gate grows with the time apart", "[pipeline]") {
+  core::RngStream rng(3, "preprocess_radar_test/gate");
+  PreprocessConfig config;
+  config.radar.selection = RadarSelection::kPersistent;
+  config.radar.gate_m = 1.0;
+  config.radar.max_speed_mps = 10.0;
+  RadarPreprocessor pre(Sensor(), config);
+  sensors::RadarFrame a = Frame({Cluster({20, 10, 30}, 5, -2.0, rng)});
+  a.t_capture_s = 0.0;
+  CHECK(pre.Process(a).count() == 0);
+  // 0.1 s later, 3 m away: beyond 1 + 10 * 0.1 = 2 m, no support.
+  sensors::RadarFrame b = Frame({Cluster({23, 10, 30}, 5, -2.0, rng)});
+  b.t_capture_s = 0.1;
+  CHECK(pre.Process(b).count() == 0);
+  // 0.2 s after a and 2 m from it (within 3 m), 1 m from b: supported twice.
+  sensors::RadarFrame c = Frame({Cluster({22, 10, 30}, 5, -2.0, rng)});
+  c.t_capture_s = 0.2;
+  config.radar.min_support = 2;
+  RadarPreprocessor strict(Sensor(), config);
+  CHECK(strict.Process(a).count() == 0);
+  CHECK(strict.Process(b).count() == 0);
+  CHECK(strict.Process(c).count() == 5);
+  pre.Reset();
+  CHECK(pre.Process(c).count() == 0);  // Reset forgot a and b
+}
+
+// Drops falling at 2 to 9.65 m/s seen straight up approach at that speed;
+// seen sideways (u_z = 0) they do not move radially.
+TEST_CASE("RadarPreprocessor: in rain, detections moving as falling drops are dropped",
+          "[pipeline]") {
+  PreprocessConfig config = Largest();
+  config.radar.rain_doppler_rejection = true;
+  config.radar.clusters_kept = 0;  // every detection: each is judged alone
+  core::WeatherConfig rain;
+  rain.rain_mm_h = 10.0;
+  const auto kept = [&](const core::WeatherConfig& w, float x, float y, float z, float v) {
+    sensors::RadarFrame frame;
+    frame.points = {{x, y, z, v, 20.0f}};
+    return RadarPreprocessor(Sensor(), config, w).Process(frame).count() == 1;
+  };
+  // The sensor is at (-20, 5, 2): (-20, 5, 32) is straight above it.
+  CHECK_FALSE(kept(rain, -20, 5, 32, -5.0f));
+  CHECK_FALSE(kept(rain, -20, 5, 32, -9.9f));  // 9.65 + the 0.5 m/s margin
+  CHECK(kept(rain, -20, 5, 32, -10.3f));
+  CHECK(kept(rain, -20, 5, 32, -1.3f));  // slower than a 0.5 mm drop
+  CHECK(kept(rain, -20, 5, 32, 3.0f));   // receding
+  // 45 degrees up: the band is -6.82 .. -1.41 m/s, widened by 0.5.
+  CHECK_FALSE(kept(rain, 10, 5, 32, -4.0f));
+  CHECK(kept(rain, 10, 5, 32, -7.5f));
+  CHECK(kept(core::WeatherConfig{}, -20, 5, 32, -5.0f));  // clear air
+  config.radar.rain_doppler_rejection = false;
+  CHECK(kept(rain, -20, 5, 32, -5.0f));
 }
 
 // DBSCAN by its definition, O(n^2): core points, their eps-connected

@@ -1,0 +1,74 @@
+#include "sensors/lidar_atmosphere.h"
+
+#include <cmath>
+#include <limits>
+
+#include "sim/core/physical_constants.h"
+
+namespace uavsim::sensors {
+namespace {
+
+constexpr double kWavelengthNm = 905.0;
+
+}  // namespace
+
+double FogExtinctionPerM(double visibility_m) {
+  const double v_km = visibility_m / 1000.0;
+  double q = 0.0;  // Kim et al. 2001: scattering in dense fog is wavelength independent
+  if (v_km > 50.0)
+    q = 1.6;
+  else if (v_km > 6.0)
+    q = 1.3;
+  else if (v_km > 1.0)
+    q = 0.16 * v_km + 0.34;
+  else if (v_km > 0.5)
+    q = v_km - 0.5;
+  return 3.912 / visibility_m * std::pow(kWavelengthNm / 550.0, -q);
+}
+
+double MarshallPalmerLambdaPerMm(double rain_mm_h) { return 4.1 * std::pow(rain_mm_h, -0.21); }
+
+double RainExtinctionPerM(double rain_mm_h) {
+  if (rain_mm_h <= 0.0) return 0.0;
+  const double lambda = MarshallPalmerLambdaPerMm(rain_mm_h);
+  // 2 * (pi/4) * N0 * integral D^2 e^{-Lambda D} dD = pi N0 / Lambda^3, mm^2 m^-3 -> m^-1.
+  return core::kPi * kMarshallPalmerN0 / (lambda * lambda * lambda) * 1e-6;
+}
+
+double AtmosphericExtinctionPerM(const core::WeatherConfig& weather) {
+  double alpha = RainExtinctionPerM(weather.rain_mm_h);
+  if (weather.fog_visibility_m) alpha += FogExtinctionPerM(*weather.fog_visibility_m);
+  return alpha;
+}
+
+double LidarOverlap(const LidarConfig& c, double range_m) {
+  if (range_m < c.min_range_m) return 0.0;
+  if (range_m >= c.full_overlap_range_m) return 1.0;
+  return (range_m - c.min_range_m) / (c.full_overlap_range_m - c.min_range_m);
+}
+
+double LidarThreshold(const LidarConfig& c) {
+  return c.reference_reflectivity / (c.max_range_m * c.max_range_m);
+}
+
+double LidarPowerOfIntensity(const LidarConfig& c, double intensity) {
+  if (intensity >= 1.0) return std::numeric_limits<double>::infinity();
+  return intensity / (c.saturation_range_m * c.saturation_range_m);
+}
+
+double FogEchoMeanPower(const LidarConfig& c, const core::WeatherConfig& w, double range_m) {
+  if (!w.fog_visibility_m || range_m <= 0.0) return 0.0;
+  const double beta = kFogBackscatterTimesVisibility / *w.fog_visibility_m;
+  const double rho_v = core::kPi * beta * core::kSpeedOfLight_mps * c.pulse_width_ns * 1e-9 / 2.0;
+  const double alpha = AtmosphericExtinctionPerM(w);
+  return rho_v * LidarOverlap(c, range_m) * std::exp(-2.0 * alpha * range_m) / (range_m * range_m);
+}
+
+double RainEchoMaxPower(const LidarConfig& c, const core::WeatherConfig& w, double range_m) {
+  if (!(w.rain_mm_h > 0.0) || range_m <= 0.0) return 0.0;
+  const double alpha = AtmosphericExtinctionPerM(w);
+  return kWaterFresnel * LidarOverlap(c, range_m) * std::exp(-2.0 * alpha * range_m) /
+         (range_m * range_m);
+}
+
+}  // namespace uavsim::sensors
