@@ -91,6 +91,17 @@ std::string SeedsCell(std::vector<long long> seeds) {
          one(seeds[(seeds.size() - 1) / 2]) + ", " + std::to_string(seeds.size()) + " comparisons)";
 }
 
+// The statistics as claims.csv keeps them (6 decimals, the spread from the
+// half-width), so that a verdict judged from the trainings and one redrawn
+// from claims.csv start from the same numbers.
+SeedStat AsWritten(const SeedStat& d) {
+  SeedStat w = d;
+  if (std::isfinite(d.mean)) w.mean = std::stod(results::FormatFixed(d.mean, 6));
+  if (std::isfinite(d.ci95)) w.ci95 = std::stod(results::FormatFixed(d.ci95, 6));
+  w.sd = SdFromCi95(w.ci95, w.n);
+  return w;
+}
+
 }  // namespace
 
 double ArtefactMargin(const std::string& dir, const std::string& artefact, bool frame,
@@ -129,6 +140,7 @@ void JudgeClaims(const std::string& dir, double fraction, std::vector<ReproduceC
       const auto key = std::make_pair(c.artefact, cmp.frame);
       if (!margins.count(key)) margins[key] = ArtefactMargin(dir, c.artefact, cmp.frame, fraction);
       cmp.margin = margins[key];
+      cmp.comparison.diff = AsWritten(cmp.comparison.diff);
       cmp.verdict = JudgeComparison(cmp.comparison.diff, cmp.margin);
       split[cmp.frame].push_back(cmp.verdict.outcome);
     }

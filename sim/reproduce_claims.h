@@ -47,7 +47,10 @@ double ArtefactMargin(const std::string& dir, const std::string& artefact, bool 
 
 // Every comparison's margin and verdict, then every claim's verdict and
 // detail from its comparisons (the frame split's into frame_verdict);
-// claims without comparisons are left as they are.
+// claims without comparisons are left as they are. Each difference is
+// first rounded as claims.csv writes it (mean and half-width to 6
+// decimals, the sd from the half-width), so that judging from the
+// trainings and redrawing from claims.csv give the same bytes.
 void JudgeClaims(const std::string& dir, double fraction, std::vector<ReproduceClaim>& claims);
 
 // claims.csv: a row per comparison (a criterion's claim: one row without),
