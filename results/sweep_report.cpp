@@ -899,7 +899,14 @@ double StudentT975(int dof) {
   if (dof < 1)
     throw std::invalid_argument("StudentT975: degrees of freedom must be >= 1, got " +
                                 std::to_string(dof));
-  return boost::math::quantile(boost::math::students_t_distribution<double>(dof), 0.975);
+  return StudentTQuantile(dof, 0.975);
+}
+
+double StudentTQuantile(int dof, double p) {
+  if (dof < 1 || !(p > 0.0 && p < 1.0))
+    throw std::invalid_argument("StudentTQuantile: needs dof >= 1 and p in (0, 1), got dof " +
+                                std::to_string(dof) + ", p " + std::to_string(p));
+  return boost::math::quantile(boost::math::students_t_distribution<double>(dof), p);
 }
 
 }  // namespace uavsim::results

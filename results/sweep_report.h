@@ -110,5 +110,9 @@ std::vector<std::string> WriteSweepReport(const std::string& dir, const SweepRep
 // The two-sided 95 % quantile of Student's t with `dof` >= 1 degrees of
 // freedom (t_{0.975, dof}); throws std::invalid_argument for dof < 1.
 double StudentT975(int dof);
+// The p-quantile of Student's t with `dof` >= 1 degrees of freedom, p in
+// (0, 1) (StudentT975(d) is StudentTQuantile(d, 0.975)); throws
+// std::invalid_argument otherwise.
+double StudentTQuantile(int dof, double p);
 
 }  // namespace uavsim::results

@@ -29,6 +29,7 @@
 #include "sim/dataset_export.h"
 #include "sim/edge_server.h"
 #include "sim/reproduce.h"
+#include "sim/reproduce_report.h"
 #include "sim/run.h"
 #include "sim/scenario.h"
 #include "sim/sweep.h"
@@ -111,11 +112,15 @@ const char* kReportHelp =
     "finished sweep folder (summary.csv, aggregate.csv, plots/, report.html) from the\n"
     "files already there, without simulating anything: after a change of style, or for a\n"
     "directory made by an older uavsim (figures whose input file it lacks say so).\n"
+    "For a folder of uavsim reproduce (claims.csv, the artefact CSVs, report.md: what\n"
+    "docs/paper keeps) it redraws the verdicts from claims.csv with this binary's rules,\n"
+    "training nothing: claims.csv and the verdict sections of report.md/report.html.\n"
     "Open DIR/report.html in a browser; it needs no network access.\n"
     "\n"
     "  --quiet   print nothing on success (warnings about figures not drawn still go to\n"
     "            stderr)\n"
-    "exit codes: 0 written, 2 DIR is neither a run directory nor a finished sweep\n";
+    "exit codes: 0 written, 2 DIR is neither a run directory, a finished sweep nor a\n"
+    "reproduction, or one of its files is malformed\n";
 
 const char* kSweepHelp =
     "usage: uavsim sweep SPEC.json [--out DIR] [--jobs N] [--shard I/N] [--quiet]\n"
@@ -282,7 +287,10 @@ const char* kReproduceHelp =
     "--variant) at every latent size and training seed, scores them on held-out\n"
     "trajectories, and writes one CSV and one PNG per artefact (Figs. 7-15, Tables II-IV),\n"
     "claims.csv, report.md and report.html: each result beside the paper's claim with a\n"
-    "verdict (holds / does not hold / mixed) from 95 % confidence intervals over seeds.\n"
+    "verdict (holds / does not hold / not resolved / mixed) from intervals over seeds, and\n"
+    "for each comparison not resolved the seeds it would need (--seeds K trains that many;\n"
+    "the seeds already trained in DIR are kept). uavsim report DIR redraws the verdicts\n"
+    "from claims.csv alone.\n"
     "Cached and resumable: DIR/episodes/*.eps and DIR/models/<training>/ are kept; a killed\n"
     "reproduction loses only the trainings under way and the same command resumes.\n"
     "\n"
@@ -294,7 +302,8 @@ const char* kReproduceHelp =
     "  --jobs N       trainings (and episodes) at a time, each in its own process with one\n"
     "                 LibTorch thread (default 1; per rank under mpirun)\n"
     "  --out DIR      default runs/reproduce-NAME (-quick with --quick)\n"
-    "  --seeds K      training seeds (default 3; quick 2)\n"
+    "  --seeds K      training seeds (default 3; quick 2); on an existing DIR only the\n"
+    "                 seeds it lacks are trained\n"
     "  --episodes N   flights per episode set (default 60; quick 6)\n"
     "  --set P=V      override the scenario's value at JSON pointer P\n"
     "\n"
@@ -812,7 +821,8 @@ int Report(int argc, char** argv) {
   if (a.Has("--help")) return std::cout << kReportHelp, kExitOk;
   if (a.positional.size() != 1)
     throw UsageError(
-        "uavsim report: expected one run directory or sweep folder (see uavsim report --help)");
+        "uavsim report: expected one run directory, sweep folder or reproduction (see uavsim "
+        "report --help)");
   const std::string dir = a.positional[0];
   namespace fs = std::filesystem;
   std::error_code ec;
@@ -826,10 +836,13 @@ int Report(int argc, char** argv) {
     } catch (const std::invalid_argument& e) {
       throw UsageError(std::string("uavsim report: ") + e.what());
     }
+  } else if (fs::is_regular_file(fs::path(dir) / "claims.csv", ec) &&
+             fs::is_regular_file(fs::path(dir) / "report.md", ec)) {
+    uavsim::sim::RedrawReproduceReport(dir);
   } else {
     throw UsageError("uavsim report: " + dir +
-                     ": neither a run directory (no metrics.json and manifest.json) nor a sweep "
-                     "folder (no sweep.json)");
+                     ": neither a run directory (no metrics.json and manifest.json), a sweep "
+                     "folder (no sweep.json) nor a reproduction (no claims.csv and report.md)");
   }
   for (const std::string& w : warnings) std::cerr << "uavsim: warning: " << w << "\n";
   if (!a.Has("--quiet")) std::printf("%s/report.html written\n", dir.c_str());

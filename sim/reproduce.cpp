@@ -80,8 +80,13 @@ Json PlanRecord(const Scenario& base, const ReproducePlan& plan, bool quick) {
           {"episode_s", plan.episodes.episode_s},
           {"data_seed", plan.episodes.seed},
           {"latent_dims", plan.latent_dims},
-          {"training", pipeline::TrainingConfigJson(plan.training)}};
+          {"training", pipeline::TrainingConfigJson(plan.training)},
+          {"equivalence_fraction", plan.equivalence_fraction}};
 }
+
+// Keys a plan record may lack when an older uavsim wrote it: added to it,
+// not a reason to refuse the folder.
+bool AddedLater(const std::string& key) { return key == "equivalence_fraction"; }
 
 // What killed invocations left: temporary files of dead processes, the
 // episode sets' scratch folders (their episodes are simulated again).
@@ -103,11 +108,18 @@ void PrepareDir(const std::string& dir, const Json& record) {
     } catch (const Json::exception& e) {
       throw core::UsageError(file.string() + ": unreadable: " + e.what());
     }
-    for (const auto& [key, value] : record.items())
+    bool added = false;
+    for (const auto& [key, value] : record.items()) {
+      if (!old.contains(key) && AddedLater(key)) {
+        old[key] = value, added = true;
+        continue;
+      }
       if (!old.contains(key) || old[key] != value)
         throw core::UsageError("uavsim reproduce: " + dir + " holds a reproduction of another " +
                                "plan (" + key + " " + (old.contains(key) ? old[key].dump() : "?") +
                                ", now " + value.dump() + "): use another --out");
+    }
+    if (added) core::WriteFileAtomic(file.string(), old.dump(2) + "\n");
     RemoveRemains(dir);
     return;
   }

@@ -37,6 +37,7 @@
 #include <vector>
 
 #include "pipeline/training/training_config.h"
+#include "sim/reproduce_verdict.h"
 #include "sim/train.h"
 
 namespace uavsim::sim {
@@ -70,8 +71,11 @@ struct ReproducePlan {
   std::vector<int> latent_dims;       // Figs. 7-9, Tab. II
   int scenario_latent_dim = 16;       // the z of the edge-network arms
   int seeds = 3;
-  double rate_run_s = 30.0;        // Tab. II: simulated seconds of each data-rate run
-  int beam_upa = 32;               // Fig. 15: the base station's array is beam_upa^2
+  double rate_run_s = 30.0;  // Tab. II: simulated seconds of each data-rate run
+  int beam_upa = 32;         // Fig. 15: the base station's array is beam_upa^2
+  // The equivalence margin's fraction (sim/reproduce_verdict.h), in the
+  // plan record before any training.
+  double equivalence_fraction = kEquivalenceFraction;
   std::vector<ReproduceArm> arms;  // stage-1 arms before the arms that reuse them
 };
 

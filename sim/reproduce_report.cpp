@@ -13,9 +13,7 @@
 #include "pipeline/training/variants.h"
 #include "results/bar_plot.h"
 #include "results/csv.h"
-#include "results/html.h"
 #include "results/plot.h"
-#include "results/sweep_report.h"  // StudentT975
 #include "sim/bench_flops.h"
 #include "sim/core/atomic_file.h"
 #include "sim/core/json_io.h"
@@ -65,23 +63,9 @@ Comparison Compare(const std::string& what, const Seeds& better, const Seeds& wo
 // ---------------------------------------------------------------------------
 // Claims.
 
-struct Claim {
-  std::string artefact;  // "Fig. 12"
-  std::string paper;     // what the paper says
-  std::string ours;      // our numbers in a phrase
-  std::vector<Comparison> comparisons;
-  bool most = false;    // the paper says "in most cases"
-  std::string verdict;  // holds / does not hold / mixed
-  std::string detail;   // how many comparisons hold
-  // The same claim on the frame split (Fig. 10a), "" when not measured.
-  std::string frame_verdict;
-};
-
-std::string Verdict(const std::vector<Comparison>& cs, bool most, std::string* detail) {
-  return ClaimVerdict(cs, most, detail);
-}
-
-void Decide(Claim& c) { c.verdict = Verdict(c.comparisons, c.most, &c.detail); }
+using Claim = ReproduceClaim;
+using Block = ReportBlock;
+using Document = ReportDocument;
 
 // ---------------------------------------------------------------------------
 // The trainings' results.
@@ -149,141 +133,6 @@ class Arms {
   const ReproducePlan& plan_;
   std::map<std::string, Json> reports_;
 };
-
-// ---------------------------------------------------------------------------
-// The report as blocks, rendered to Markdown and HTML.
-
-struct Block {
-  enum Kind { kHeading, kText, kTable, kImage } kind = kText;
-  std::string text;                            // heading, paragraph, image caption
-  std::string file;                            // image: PNG beside the report
-  std::vector<std::vector<std::string>> rows;  // table: header first
-};
-
-struct Document {
-  std::vector<Block> blocks;
-  void Heading(const std::string& t) { blocks.push_back({Block::kHeading, t, "", {}}); }
-  void Text(const std::string& t) { blocks.push_back({Block::kText, t, "", {}}); }
-  void Table(std::vector<std::vector<std::string>> rows) {
-    blocks.push_back({Block::kTable, "", "", std::move(rows)});
-  }
-  void Image(const std::string& file, const std::string& caption) {
-    blocks.push_back({Block::kImage, caption, file, {}});
-  }
-};
-
-std::string MdCell(std::string s) {
-  std::string out;
-  for (char c : s) out += c == '|' ? std::string("\\|") : std::string(1, c);
-  return out;
-}
-
-std::string RenderMarkdown(const std::string& title, const Document& d) {
-  std::ostringstream md;
-  md << "# " << title << "\n";
-  for (const Block& b : d.blocks) {
-    md << "\n";
-    switch (b.kind) {
-      case Block::kHeading:
-        md << "## " << b.text << "\n";
-        break;
-      case Block::kText:
-        md << b.text << "\n";
-        break;
-      case Block::kImage:
-        md << "![" << b.text << "](" << b.file << ")\n";
-        break;
-      case Block::kTable:
-        for (std::size_t r = 0; r < b.rows.size(); ++r) {
-          md << "|";
-          for (const std::string& c : b.rows[r]) md << " " << MdCell(c) << " |";
-          md << "\n";
-          if (r == 0) {
-            md << "|";
-            for (std::size_t c = 0; c < b.rows[0].size(); ++c) md << "---|";
-            md << "\n";
-          }
-        }
-        break;
-    }
-  }
-  return md.str();
-}
-
-// Inline `code` spans of a paragraph as <code>.
-std::string HtmlText(const std::string& s) {
-  std::string out;
-  bool code = false;
-  std::string run;
-  for (char c : s) {
-    if (c == '`') {
-      out += results::HtmlEscape(run);
-      run.clear();
-      out += code ? "</code>" : "<code>";
-      code = !code;
-    } else {
-      run += c;
-    }
-  }
-  out += results::HtmlEscape(run);
-  if (code) out += "</code>";
-  return out;
-}
-
-std::string VerdictClass(const std::string& cell) {
-  if (cell.rfind("holds", 0) == 0) return " class=\"holds\"";
-  if (cell.rfind("does not hold", 0) == 0) return " class=\"fails\"";
-  if (cell.rfind("mixed", 0) == 0) return " class=\"mixed\"";
-  return "";
-}
-
-std::string RenderHtml(const std::string& title, const Document& d) {
-  std::ostringstream h;
-  h << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n<title>"
-    << results::HtmlEscape(title)
-    << "</title>\n<style>\n"
-       "body{font-family:sans-serif;max-width:1100px;margin:2em auto;padding:0 1em;"
-       "color:#222;line-height:1.45}\n"
-       "table{border-collapse:collapse;margin:1em 0;font-size:0.92em}\n"
-       "td,th{border:1px solid #ccc;padding:0.25em 0.6em;vertical-align:top}\n"
-       "th{background:#f2f2f2}\n"
-       "td.holds{background:#dff0d8}td.fails{background:#f2dede}td.mixed{background:#fcf8e3}\n"
-       "img{max-width:100%;border:1px solid #ddd;margin:0.5em 0}\n"
-       "code{background:#f5f5f5;padding:0 0.2em}\n"
-       "</style></head><body>\n<h1>"
-    << results::HtmlEscape(title) << "</h1>\n";
-  for (const Block& b : d.blocks) {
-    switch (b.kind) {
-      case Block::kHeading:
-        h << "<h2>" << results::HtmlEscape(b.text) << "</h2>\n";
-        break;
-      case Block::kText:
-        h << "<p>" << HtmlText(b.text) << "</p>\n";
-        break;
-      case Block::kImage:
-        h << "<figure><img src=\"" << results::HtmlEscape(b.file) << "\" alt=\""
-          << results::HtmlEscape(b.text) << "\"><figcaption>" << results::HtmlEscape(b.text)
-          << "</figcaption></figure>\n";
-        break;
-      case Block::kTable:
-        h << "<table>\n";
-        for (std::size_t r = 0; r < b.rows.size(); ++r) {
-          h << "<tr>";
-          for (const std::string& c : b.rows[r]) {
-            if (r == 0)
-              h << "<th>" << results::HtmlEscape(c) << "</th>";
-            else
-              h << "<td" << VerdictClass(c) << ">" << HtmlText(c) << "</td>";
-          }
-          h << "</tr>\n";
-        }
-        h << "</table>\n";
-        break;
-    }
-  }
-  h << "</body></html>\n";
-  return h.str();
-}
 
 // ---------------------------------------------------------------------------
 // Artefact writers.
@@ -463,12 +312,11 @@ void DecoderFigures(Writer& w, const Arms& arms, const ReproducePlan& plan) {
                               " error at every latent size (\"the scheme with included "
                               "preprocessing consistently outperforms\")");
       for (int z : plan.latent_dims)
-        c.comparisons.push_back(Compare("pre-processed below raw, z " + std::to_string(z),
+        c.comparisons.push_back(Compare("pre-processed below raw; z " + std::to_string(z),
                                         v["IB"][z], v["IB without pre-processing"][z]));
       c.ours = "z " + std::to_string(arms.z0()) + ": " + MeanCi(Summarise(v["IB"][arms.z0()])) +
                " m pre-processed vs " +
                MeanCi(Summarise(v["IB without pre-processing"][arms.z0()])) + " m raw";
-      Decide(c);
     }
     {
       // Camera: IB better than the MLP everywhere; LiDAR and radar: at low z.
@@ -479,12 +327,11 @@ void DecoderFigures(Writer& w, const Arms& arms, const ReproducePlan& plan) {
       for (int z : plan.latent_dims) {
         if (m != 0 && z > 8) continue;
         c.comparisons.push_back(
-            Compare("IB below MLP, z " + std::to_string(z), v["IB"][z], v["MLP"][z]));
+            Compare("IB below MLP; z " + std::to_string(z), v["IB"][z], v["MLP"][z]));
       }
       const int zl = plan.latent_dims.front();
       c.ours = "z " + std::to_string(zl) + ": IB " + MeanCi(Summarise(v["IB"][zl])) + " m, MLP " +
                MeanCi(Summarise(v["MLP"][zl])) + " m";
-      Decide(c);
     }
     if (m == 0) {
       Claim& c = AddClaim(w, f, "With the MLP, the camera error decreases as z grows");
@@ -494,7 +341,6 @@ void DecoderFigures(Writer& w, const Arms& arms, const ReproducePlan& plan) {
                   v["MLP"][lo]));
       c.ours = "z " + std::to_string(lo) + ": " + MeanCi(Summarise(v["MLP"][lo])) + " m, z " +
                std::to_string(hi) + ": " + MeanCi(Summarise(v["MLP"][hi])) + " m";
-      Decide(c);
     }
   }
 }
@@ -787,7 +633,6 @@ void RateFigure(Writer& w, const Arms& arms, const ReproducePlan& plan, const Sc
              ", camera " + MeanCi(Summarise(mean_rate("camera")), 3) + ", lidar " +
              MeanCi(Summarise(mean_rate("lidar")), 3) + ", radar " +
              MeanCi(Summarise(mean_rate("radar")), 3) + " bit/s/Hz";
-    Decide(c);
   }
   {
     Claim& c = AddClaim(w, "Fig. 15",
@@ -801,64 +646,39 @@ void RateFigure(Writer& w, const Arms& arms, const ReproducePlan& plan, const Sc
     c.ours = "all three " + MeanCi(g, 2) + " % below the perfect beam (mean over the grid)";
     const double upper = std::isfinite(g.ci95) ? g.mean + g.ci95 : g.mean;
     const double lower = std::isfinite(g.ci95) ? g.mean - g.ci95 : g.mean;
-    c.verdict = upper < 5.0 ? "holds" : lower > 5.0 ? "does not hold" : "mixed";
+    c.verdict = upper < 5.0 ? "holds" : lower > 5.0 ? "does not hold" : "not resolved";
     c.detail = "criterion: \"approaches\" read as within 5 % (the interval's upper end)";
   }
 }
 
+// ---------------------------------------------------------------------------
+// The verdicts, from the trainings' reports or from claims.csv alike.
+
+constexpr const char* kRecordedRule =
+    "written in the plan record (reproduce.json) before the first training";
+
+// Judges the claims, puts the verdicts' rules (the margin's `provenance`
+// in them) at the end of the protocol
+// paragraph (block `protocol`, replacing those it carries), the verdicts at
+// `summary_at` and every comparison at the end, and writes claims.csv,
+// report.md and report.html into dir.
+void WriteVerdicts(const std::string& dir, double fraction, const std::string& provenance,
+                   std::vector<Claim>& claims, Document& doc, std::size_t protocol,
+                   std::size_t summary_at, const std::string& title) {
+  JudgeClaims(dir, fraction, claims);
+  std::string& p = doc.blocks.at(protocol).text;
+  p = p.substr(0, p.find(" Verdicts compare methods")) + " " +
+      VerdictRuleText(claims, fraction, provenance);
+  const std::vector<Block> summary = VerdictBlocks(claims);
+  doc.blocks.insert(doc.blocks.begin() + static_cast<std::ptrdiff_t>(summary_at), summary.begin(),
+                    summary.end());
+  for (const Block& b : ComparisonBlocks(claims)) doc.blocks.push_back(b);
+  core::WriteFileAtomic((fs::path(dir) / "claims.csv").string(), ClaimsCsv(claims));
+  core::WriteFileAtomic((fs::path(dir) / "report.md").string(), RenderMarkdown(title, doc));
+  core::WriteFileAtomic((fs::path(dir) / "report.html").string(), RenderHtml(title, doc));
+}
+
 }  // namespace
-
-SeedStat SummariseSeeds(const std::vector<double>& v) {
-  SeedStat s;
-  double sum = 0.0;
-  for (double x : v)
-    if (std::isfinite(x)) sum += x, ++s.n;
-  if (s.n == 0) return s;
-  s.mean = sum / s.n;
-  if (s.n < 2) return s;
-  double ss = 0.0;
-  for (double x : v)
-    if (std::isfinite(x)) ss += (x - s.mean) * (x - s.mean);
-  s.ci95 = results::StudentT975(s.n - 1) * std::sqrt(ss / (s.n - 1)) / std::sqrt(s.n);
-  return s;
-}
-
-SeedComparison CompareSeeds(const std::string& what, const std::vector<double>& better,
-                            const std::vector<double>& worse) {
-  std::vector<double> d;
-  for (std::size_t i = 0; i < better.size() && i < worse.size(); ++i)
-    if (std::isfinite(better[i]) && std::isfinite(worse[i])) d.push_back(worse[i] - better[i]);
-  SeedComparison c;
-  c.what = what;
-  c.diff = SummariseSeeds(d);
-  if (c.diff.n == 0) return c;
-  if (!std::isfinite(c.diff.ci95)) {
-    c.sign = c.diff.mean > 0 ? 1 : (c.diff.mean < 0 ? -1 : 0);
-  } else if (c.diff.mean - c.diff.ci95 > 0) {
-    c.sign = 1;
-  } else if (c.diff.mean + c.diff.ci95 < 0) {
-    c.sign = -1;
-  }
-  return c;
-}
-
-std::string ClaimVerdict(const std::vector<SeedComparison>& cs, bool most, std::string* detail) {
-  int hold = 0, reversed = 0, noise = 0;
-  for (const SeedComparison& c : cs) (c.sign > 0 ? hold : c.sign < 0 ? reversed : noise)++;
-  const int n = static_cast<int>(cs.size());
-  if (detail) {
-    *detail = std::to_string(hold) + " of " + std::to_string(n) + " comparisons hold";
-    if (reversed) *detail += ", " + std::to_string(reversed) + " reversed";
-    if (noise) *detail += ", " + std::to_string(noise) + " within noise";
-  }
-  if (n == 0) return "not measured";
-  if (most ? (2 * hold > n && reversed == 0) : hold == n) return "holds";
-  if (hold == 0) {
-    if (detail && reversed == 0) *detail += " (none reversed: not resolved at this many seeds)";
-    return "does not hold";
-  }
-  return "mixed";
-}
 
 std::vector<std::string> WriteReproduceReport(const ReproduceReportInputs& in) {
   const ReproducePlan& plan = *in.plan;
@@ -874,6 +694,7 @@ std::vector<std::string> WriteReproduceReport(const ReproduceReportInputs& in) {
                        "plan does)"
                      : "") +
            "; uavsim " + Version() + " (" + GitHash() + "). Command: `" + in.command_line + "`.");
+  const std::size_t protocol_at = doc.blocks.size();
   doc.Text(
       "Protocol: " + std::to_string(plan.episodes.episodes) + " simulated flights of " +
       core::FormatNumber(plan.episodes.episode_s) +
@@ -882,10 +703,8 @@ std::vector<std::string> WriteReproduceReport(const ReproduceReportInputs& in) {
       "10a also by frame, the split common in the literature, as a second column); " +
       std::to_string(plan.seeds) +
       " training seeds (each its own split, initial weights and dropout); every value is the "
-      "mean over seeds with its 95 % confidence interval (Student t). Verdicts compare "
-      "methods seed by seed on the same held-out flights: a comparison holds when the "
-      "interval of the difference lies on the paper's side of 0, is reversed when on the "
-      "other, else is within noise.");
+      "mean over seeds with its 95 % confidence interval (Student t).");  // WriteVerdicts adds the
+                                                                          // verdicts' rules
   // Wall time over every invocation that got past the episodes.
   double total_wall_s = 0.0;
   std::size_t invocations = 0;
@@ -923,34 +742,34 @@ std::vector<std::string> WriteReproduceReport(const ReproduceReportInputs& in) {
     Claim& c = AddClaim(w, "Fig. 10a",
                         "Localization improves with the number of modalities (with "
                         "pre-processing)");
-    c.comparisons = MoreModalitiesBetter(pre.at("by trajectory"), "");
+    for (const Comparison& t : MoreModalitiesBetter(pre.at("by trajectory"), ""))
+      c.comparisons.push_back(t);
     c.ours = "all " + Summary(pre.at("by trajectory"), "all") + " m; camera " +
              Summary(pre.at("by trajectory"), "camera") + ", lidar " +
              Summary(pre.at("by trajectory"), "lidar") + ", radar " +
              Summary(pre.at("by trajectory"), "radar") + " m";
-    Decide(c);
-    c.frame_verdict = Verdict(MoreModalitiesBetter(pre.at("by frame"), ""), false, nullptr) +
-                      " (all " + Summary(pre.at("by frame"), "all") + " m)";
+    for (const Comparison& f : MoreModalitiesBetter(pre.at("by frame"), ""))
+      c.comparisons.push_back({f, true});
+    c.frame_note = "(all " + Summary(pre.at("by frame"), "all") + " m)";
   }
   {
     Claim& c = AddClaim(w, "Fig. 10b",
                         "Localization improves with the number of modalities (without "
                         "pre-processing)");
-    c.comparisons = MoreModalitiesBetter(raw.at("by trajectory"), "");
+    for (const Comparison& t : MoreModalitiesBetter(raw.at("by trajectory"), ""))
+      c.comparisons.push_back(t);
     c.ours = "all " + Summary(raw.at("by trajectory"), "all") + " m";
-    Decide(c);
   }
   {
     Claim& c = AddClaim(w, "Figs. 10a, 10b",
                         "Pre-processing has a strong positive influence on accuracy (every "
                         "modality combination)");
     for (const std::string& s : Subsets())
-      c.comparisons.push_back(Compare("pre-processed below raw, " + s,
+      c.comparisons.push_back(Compare("pre-processed below raw; " + s,
                                       pre.at("by trajectory").at(s),
                                       raw.at("by trajectory").at(s)));
     c.ours = "all: " + Summary(pre.at("by trajectory"), "all") + " vs " +
              Summary(raw.at("by trajectory"), "all") + " m";
-    Decide(c);
   }
   {
     Claim& c = AddClaim(w, "Sec. VII",
@@ -962,7 +781,6 @@ std::vector<std::string> WriteReproduceReport(const ReproduceReportInputs& in) {
                      Compare("lidar below radar", v.at("lidar"), v.at("radar"))};
     c.ours = "camera " + Summary(v, "camera") + ", lidar " + Summary(v, "lidar") + ", radar " +
              Summary(v, "radar") + " m (all weathers of the set)";
-    Decide(c);
   }
 
   // Tab. IV.
@@ -1004,7 +822,6 @@ std::vector<std::string> WriteReproduceReport(const ReproduceReportInputs& in) {
     c.ours = MeanCi(Summarise(v["no modality"])) + " / " + MeanCi(Summarise(v["LiDAR and radar"])) +
              " / " + MeanCi(Summarise(v["camera"])) + " / " +
              MeanCi(Summarise(v["three modalities"])) + " m";
-    Decide(c);
   }
 
   // Fig. 11.
@@ -1025,7 +842,6 @@ std::vector<std::string> WriteReproduceReport(const ReproduceReportInputs& in) {
     c.ours = "Mamba " + Summary(t_pre.at("Mamba"), "all") + ", GRU " +
              Summary(t_pre.at("GRU"), "all") + ", LSTM " + Summary(t_pre.at("LSTM"), "all") +
              ", TCN " + Summary(t_pre.at("TCN"), "all") + " m";
-    Decide(c);
   }
   {
     Claim& c =
@@ -1035,7 +851,6 @@ std::vector<std::string> WriteReproduceReport(const ReproduceReportInputs& in) {
           Compare(t + ": pre-processed below raw", t_pre.at(t).at("all"), t_raw.at(t).at("all")));
     c.ours = "all modalities, raw: Mamba " + Summary(t_raw.at("Mamba"), "all") + ", GRU " +
              Summary(t_raw.at("GRU"), "all") + " m";
-    Decide(c);
   }
   {
     Claim& c =
@@ -1057,7 +872,6 @@ std::vector<std::string> WriteReproduceReport(const ReproduceReportInputs& in) {
     c.ours = "spread (max - min, all modalities): pre-processed " +
              MeanCi(Summarise(spread(t_pre))) + " m, raw " + MeanCi(Summarise(spread(t_raw))) +
              " m";
-    Decide(c);
   }
 
   // Fig. 12.
@@ -1074,12 +888,11 @@ std::vector<std::string> WriteReproduceReport(const ReproduceReportInputs& in) {
     Claim& c = AddClaim(w, "Fig. 12", "TE-Align consistently outperforms the resampling methods");
     for (const char* r : {"first", "middle", "random"})
       for (const std::string& s : Subsets())
-        c.comparisons.push_back(Compare("TE-Align below " + std::string(r) + ", " + s,
+        c.comparisons.push_back(Compare("TE-Align below " + std::string(r) + "; " + s,
                                         align.at("TE-Align").at(s), align.at(r).at(s)));
     c.ours = "all modalities: TE-Align " + Summary(align.at("TE-Align"), "all") + ", first " +
              Summary(align.at("first"), "all") + ", middle " + Summary(align.at("middle"), "all") +
              ", random " + Summary(align.at("random"), "all") + " m";
-    Decide(c);
   }
 
   // Fig. 13.
@@ -1092,15 +905,13 @@ std::vector<std::string> WriteReproduceReport(const ReproduceReportInputs& in) {
   {
     Claim& c =
         AddClaim(w, "Fig. 13", "In most cases the best performance is with both MADW and MICA");
-    c.most = true;
     for (const char* o : {"MADW", "MICA", "neither"})
       for (const std::string& s : Subsets())
-        c.comparisons.push_back(Compare("both below " + std::string(o) + ", " + s,
+        c.comparisons.push_back(Compare("both below " + std::string(o) + "; " + s,
                                         fusion.at("MADW + MICA").at(s), fusion.at(o).at(s)));
     c.ours = "all modalities: both " + Summary(fusion.at("MADW + MICA"), "all") + ", MADW " +
              Summary(fusion.at("MADW"), "all") + ", MICA " + Summary(fusion.at("MICA"), "all") +
              ", neither " + Summary(fusion.at("neither"), "all") + " m";
-    Decide(c);
   }
   {
     Claim& c = AddClaim(w, "Fig. 13",
@@ -1127,7 +938,6 @@ std::vector<std::string> WriteReproduceReport(const ReproduceReportInputs& in) {
     for (double& x : without) x = -x;
     c.ours = "gain of both over neither: subsets with radar " + MeanCi(Summarise(with)) +
              " m, without " + MeanCi(Summarise(without)) + " m";
-    Decide(c);
   }
 
   // Fig. 14.
@@ -1143,67 +953,122 @@ std::vector<std::string> WriteReproduceReport(const ReproduceReportInputs& in) {
     Claim& c = AddClaim(w, "Fig. 14", "UAVLoc outperforms all the considered baselines");
     for (const char* b : {"early fusion", "late weighted fusion", "modality dropout", "HeMIS"})
       for (const std::string& s : Subsets())
-        c.comparisons.push_back(Compare("UAVLoc below " + std::string(b) + ", " + s,
+        c.comparisons.push_back(Compare("UAVLoc below " + std::string(b) + "; " + s,
                                         base_f.at("UAVLoc").at(s), base_f.at(b).at(s)));
     c.ours = "all modalities: UAVLoc " + Summary(base_f.at("UAVLoc"), "all") + ", early " +
              Summary(base_f.at("early fusion"), "all") + ", late " +
              Summary(base_f.at("late weighted fusion"), "all") + ", dropout " +
              Summary(base_f.at("modality dropout"), "all") + ", HeMIS " +
              Summary(base_f.at("HeMIS"), "all") + " m";
-    Decide(c);
   }
 
   RateFigure(w, arms, plan, base);
 
-  // The verdicts, first in the report, and claims.csv.
-  std::vector<Block> summary;
-  summary.push_back({Block::kHeading, "Verdicts", "", {}});
-  std::vector<std::vector<std::string>> rows{
-      {"artefact", "the paper says", "uavsim (mean ± 95 % CI)", "verdict", "frame split"}};
-  std::ostringstream csv;
-  csv << "artefact,claim,ours,verdict,detail,frame_split_verdict,comparison,diff_mean,"
-         "diff_ci95,seeds,comparison_verdict\n";
-  int holds = 0, fails = 0, mixed = 0;
+  const std::string title =
+      "The paper's Sec. VI in simulation: " + base.name + (in.quick ? " (quick, toy size)" : "");
+  WriteVerdicts(in.dir, plan.equivalence_fraction, kRecordedRule, w.claims, doc, protocol_at,
+                summary_at, title);
+  return w.warnings;
+}
+
+namespace {
+
+// The claims' texts as the report wrote them (claims.csv writes ';' for
+// ','): artefact, claim, ours, a criterion's detail and the frame split's
+// verdict, from the verdict table of report.md, row by row.
+void TextsFromReport(const std::string& md_file, const Block& table, std::vector<Claim>& claims) {
+  if (table.rows.size() != claims.size() + 1 || table.rows[0].size() < 4)
+    throw core::UsageError(md_file + ": the verdict table has " +
+                           std::to_string(table.rows.size() - 1) + " claims, claims.csv " +
+                           std::to_string(claims.size()));
   const auto clean = [](std::string s) {
     std::replace(s.begin(), s.end(), ',', ';');
     return s;
   };
-  for (const Claim& c : w.claims) {
-    rows.push_back({c.artefact, c.paper, c.ours,
-                    c.verdict + (c.detail.empty() ? "" : ": " + c.detail),
-                    c.frame_verdict.empty() ? "-" : c.frame_verdict});
-    holds += c.verdict == "holds";
-    fails += c.verdict == "does not hold";
-    mixed += c.verdict == "mixed";
-    const std::string head = clean(c.artefact) + "," + clean(c.paper) + "," + clean(c.ours) + "," +
-                             c.verdict + "," + clean(c.detail) + "," + clean(c.frame_verdict) + ",";
-    if (c.comparisons.empty()) csv << head << ",,,,\n";
-    for (const Comparison& cmp : c.comparisons)
-      csv << head << clean(cmp.what) << "," << Fixed(cmp.diff.mean, 6) << ","
-          << Fixed(cmp.diff.ci95, 6) << "," << cmp.diff.n << ","
-          << (cmp.sign > 0   ? "holds"
-              : cmp.sign < 0 ? "reversed"
-                             : "within noise")
-          << "\n";
+  for (std::size_t k = 0; k < claims.size(); ++k) {
+    const std::vector<std::string>& row = table.rows[k + 1];
+    Claim& c = claims[k];
+    if (clean(row[0]) != c.artefact || clean(row[1]) != c.paper)
+      throw core::UsageError(md_file + ": the verdict table's row " + std::to_string(k + 1) + " (" +
+                             row[0] + ") is not claims.csv's claim " + std::to_string(k + 1) +
+                             " (" + c.artefact + ")");
+    c.artefact = row[0], c.paper = row[1], c.ours = row[2];
+    if (c.comparisons.empty() && row[3].rfind(c.verdict + ": ", 0) == 0)
+      c.detail = row[3].substr(c.verdict.size() + 2);
+    const bool frame = std::any_of(c.comparisons.begin(), c.comparisons.end(),
+                                   [](const ClaimComparison& x) { return x.frame; });
+    const std::string& f = row.back();
+    if (frame || f == "-" || table.rows[0].back() != "frame split") continue;
+    // Its comparisons are not in claims.csv: the verdict stays as written.
+    const std::string why =
+        "by the earlier three-outcome rule: its comparisons are not in "
+        "claims.csv";
+    c.frame_verdict = !f.empty() && f.back() == ')' ? f.substr(0, f.size() - 1) + "; " + why + ")"
+                                                    : f + " (" + why + ")";
+    if (f.find(why) != std::string::npos) c.frame_verdict = f;
   }
-  w.Csv("claims.csv", csv.str());
-  summary.push_back({Block::kText,
-                     std::to_string(w.claims.size()) + " claims: " + std::to_string(holds) +
-                         " hold, " + std::to_string(fails) + " do not hold, " +
-                         std::to_string(mixed) +
-                         " mixed. Each claim's comparisons, with the mean difference and its "
-                         "interval, are in claims.csv.",
-                     "",
-                     {}});
-  summary.push_back({Block::kTable, "", "", rows});
-  doc.blocks.insert(doc.blocks.begin() + static_cast<std::ptrdiff_t>(summary_at), summary.begin(),
-                    summary.end());
+}
 
-  const std::string title =
-      "The paper's Sec. VI in simulation: " + base.name + (in.quick ? " (quick, toy size)" : "");
-  core::WriteFileAtomic((fs::path(in.dir) / "report.md").string(), RenderMarkdown(title, doc));
-  core::WriteFileAtomic((fs::path(in.dir) / "report.html").string(), RenderHtml(title, doc));
-  return w.warnings;
+}  // namespace
+
+void RedrawReproduceReport(const std::string& dir) {
+  const std::string md_file = (fs::path(dir) / "report.md").string();
+  std::vector<Claim> claims = ReadClaimsCsv((fs::path(dir) / "claims.csv").string());
+  std::string title;
+  Document doc;
+  try {
+    doc = ParseMarkdown(core::ReadFileBytes(md_file), &title);
+  } catch (const std::invalid_argument& e) {
+    throw core::UsageError(md_file + ": " + e.what());
+  }
+  const std::size_t verdicts = doc.FindHeading("Verdicts");
+  std::size_t table = verdicts;
+  while (table < doc.NextHeading(verdicts) && doc.blocks[table].kind != Block::kTable) ++table;
+  if (verdicts == doc.blocks.size() || table == doc.NextHeading(verdicts))
+    throw core::UsageError(md_file + ": no verdict table (\"## Verdicts\")");
+  TextsFromReport(md_file, doc.blocks[table], claims);
+  doc.blocks.erase(doc.blocks.begin() + static_cast<std::ptrdiff_t>(verdicts),
+                   doc.blocks.begin() + static_cast<std::ptrdiff_t>(doc.NextHeading(verdicts)));
+  const std::size_t every = doc.FindHeading("Every comparison");
+  if (every < doc.blocks.size())
+    doc.blocks.erase(doc.blocks.begin() + static_cast<std::ptrdiff_t>(every),
+                     doc.blocks.begin() + static_cast<std::ptrdiff_t>(doc.NextHeading(every)));
+  std::size_t protocol = 0;
+  while (protocol < verdicts && doc.blocks[protocol].text.rfind("Protocol: ", 0) != 0) ++protocol;
+  if (protocol == verdicts) throw core::UsageError(md_file + ": no protocol paragraph");
+
+  // The margin rule: the plan record's when DIR has one, else this binary's.
+  double fraction = kEquivalenceFraction;
+  bool recorded = false;
+  const fs::path record = fs::path(dir) / "reproduce.json";
+  std::error_code ec;
+  if (fs::is_regular_file(record, ec)) {
+    const Json r = core::LoadJsonFile(record.string());
+    if (r.contains("equivalence_fraction") && r["equivalence_fraction"].is_number())
+      fraction = r["equivalence_fraction"].get<double>(), recorded = true;
+  }
+  const std::string note =
+      std::string("Verdicts redrawn by `uavsim report DIR` (uavsim ") + Version() + ", " +
+      GitHash() +
+      ") from this folder's claims.csv and artefact tables, without re-running any training: "
+      "the figures and tables below are those the trainings' report wrote; the margin rule is " +
+      (recorded ? "the plan record's (reproduce.json)."
+                : "this binary's (the folder has no plan record of one), not one recorded before "
+                  "the trainings.");
+  Block& next = doc.blocks.at(protocol + 1);
+  std::size_t summary_at = verdicts;
+  if (next.kind == Block::kText && next.text.rfind("Verdicts redrawn", 0) == 0) {
+    next.text = note;
+  } else {
+    doc.blocks.insert(doc.blocks.begin() + static_cast<std::ptrdiff_t>(protocol + 1),
+                      {Block::kText, note, "", {}});
+    ++summary_at;
+  }
+  WriteVerdicts(dir, fraction,
+                recorded ? kRecordedRule
+                         : "of the binary that redrew this report, set after these trainings "
+                           "(next paragraph)",
+                claims, doc, protocol, summary_at, title);
 }
 
 }  // namespace uavsim::sim

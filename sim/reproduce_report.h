@@ -23,19 +23,20 @@
 //   report.md, report.html
 //
 // A verdict compares methods seed by seed (they share the seed's held-out
-// trajectories): for "A below B" the difference B - A per seed, its mean
-// and 95 % CI (Student t over seeds); it holds when the interval lies above
-// 0, is reversed when below, else is within noise (one seed: the sign). A
-// claim of several comparisons holds when all hold ("most": more than half
-// and none reversed), does not hold when none holds, else is mixed.
+// trajectories): for "A below B" the difference B - A per seed, judged by
+// the rules of sim/reproduce_verdict.h (holds, reversed, no effect against
+// the artefact's equivalence margin, not resolved, with the seeds a
+// comparison not resolved would need), and the claims from their
+// comparisons (sim/reproduce_claims.h).
 #pragma once
 
 #include <cstddef>
-#include <limits>
 #include <string>
 #include <vector>
 
 #include "sim/reproduce.h"
+#include "sim/reproduce_claims.h"
+#include "sim/reproduce_verdict.h"
 #include "sim/scenario.h"
 
 namespace uavsim::sim {
@@ -49,31 +50,20 @@ struct ReproduceReportInputs {
   std::size_t trained_now = 0;  // trainings this invocation ran
 };
 
-// The statistics of the verdicts (the report's rules above).
-struct SeedStat {
-  double mean = std::numeric_limits<double>::quiet_NaN();
-  double ci95 = std::numeric_limits<double>::quiet_NaN();  // half-width; NaN for n < 2
-  int n = 0;                                               // finite values
-};
-// Mean and Student-t 95 % half-width of the finite values (NaN: missing).
-SeedStat SummariseSeeds(const std::vector<double>& values);
-
-struct SeedComparison {
-  std::string what;
-  SeedStat diff;  // worse - better per seed (where both are finite)
-  int sign = 0;   // +1 holds, -1 reversed, 0 within noise or no data
-};
-// "better below worse", seed by seed (index: seed - 1).
-SeedComparison CompareSeeds(const std::string& what, const std::vector<double>& better,
-                            const std::vector<double>& worse);
-// "holds", "does not hold", "mixed" ("not measured" without comparisons);
-// `detail` (if not null) says how many comparisons hold.
-std::string ClaimVerdict(const std::vector<SeedComparison>& comparisons, bool most,
-                         std::string* detail);
-
 // Writes every artefact and the reports. Returns warnings (a figure not
 // drawn: gnuplot missing, ...). Throws std::runtime_error when a training's
 // files are missing or unreadable.
 std::vector<std::string> WriteReproduceReport(const ReproduceReportInputs& in);
+
+// Redraws the verdicts of a reproduction folder from what it keeps (a
+// folder of docs/paper: claims.csv, the artefact CSVs and report.md) with
+// the rules of this binary, no training read or re-run: claims.csv, the
+// protocol's rules, the "Verdicts" and "Every comparison" sections of
+// report.md and report.html rewritten, a paragraph saying so added, every
+// other block kept as it was. The margin fraction is DIR/reproduce.json's
+// when it records one. A frame-split verdict whose comparisons claims.csv
+// lacks (a report written before them) stays as written and says so.
+// Throws core::UsageError naming the file for a missing or malformed file.
+void RedrawReproduceReport(const std::string& dir);
 
 }  // namespace uavsim::sim
