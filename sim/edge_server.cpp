@@ -68,6 +68,10 @@ core::Json ExtensionsOf(const pipeline::ModelManifest& m) {
   if (t.camera_roi_geometry) ext.push_back("camera_roi_geometry=true");
   if (t.te_align_tau_origin != pipeline::TauOrigin::kClock)
     ext.push_back("te_align_tau_origin=window");
+  if (t.point_frame != pipeline::PointFrame::kScene)
+    ext.push_back(std::string("point_frame=") + pipeline::PointFrameName(t.point_frame));
+  if (t.point_norm != pipeline::PointNorm::kBatch)
+    ext.push_back(std::string("point_norm=") + pipeline::PointNormName(t.point_norm));
   return ext;
 }
 

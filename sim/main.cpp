@@ -180,7 +180,9 @@ const char* kTrainHelp =
     "                 layers temporal (mamba|gru|lstm|tcn) mica_lambda_init\n"
     "                 te_align_tau_origin (window|clock)\n"
     "                 camera_stereo_branches (shared|two)\n"
-    "                 camera_eye_pool_side camera_roi_geometry selection_weight\n"
+    "                 camera_eye_pool_side camera_roi_geometry\n"
+    "                 point_frame (scene|centroid) point_norm (batch|group|none)\n"
+    "                 selection_weight\n"
     "                 selection_radius_m filter_preference_m offset_calibration_radius_m\n"
     "                 position_loss (mixture|mean) alignment (te_align|first|middle|random)\n"
     "                 madw mica fusion (uavloc|early|late|hemis);\n"
@@ -651,6 +653,14 @@ int Train(int argc, char** argv) {
       for (const auto& [modality, d] : r.test_decoder)
         std::printf(" %s %.3f (%zu obs.)", modality.c_str(), d.rmse_m, d.observations);
       std::printf("\n");
+      // The information limit beside it: the same on-target observations'
+      // centroid (the camera: its ray at the true range).
+      for (const auto& [modality, d] : r.test_decoder)
+        std::printf(
+            "  %-6s on target %.3f (%zu obs.), centroid of the same %.3f; off target %.3f (%zu "
+            "obs.)\n",
+            modality.c_str(), d.on_target_rmse_m, d.on_target, d.centroid_on_target_m,
+            d.off_target_rmse_m, d.off_target);
     }
     if (r.test_common.size() > 1) {
       std::size_t fewest = ~std::size_t{0}, most = 0;

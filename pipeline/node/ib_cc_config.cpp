@@ -27,6 +27,32 @@ void Visit(V& v, IbCcConfig& c) {
   v.Check(c.eye_pool_side == 0 || 32 % c.eye_pool_side == 0, "eye_pool_side",
           "expected 0 (no pooling) or a divisor of 32, got " + std::to_string(c.eye_pool_side));
   v("roi_geometry", c.roi_geometry);
+  v.Enum("point_frame", c.point_frame, PointFrameNames());
+  v.Enum("point_norm", c.point_norm, PointNormNames());
+}
+
+const std::vector<std::pair<const char*, PointFrame>>& PointFrameNames() {
+  static const std::vector<std::pair<const char*, PointFrame>> names = {
+      {"scene", PointFrame::kScene}, {"centroid", PointFrame::kCentroid}};
+  return names;
+}
+
+const std::vector<std::pair<const char*, PointNorm>>& PointNormNames() {
+  static const std::vector<std::pair<const char*, PointNorm>> names = {
+      {"batch", PointNorm::kBatch}, {"group", PointNorm::kGroup}, {"none", PointNorm::kNone}};
+  return names;
+}
+
+const char* PointFrameName(PointFrame f) {
+  for (const auto& [name, value] : PointFrameNames())
+    if (value == f) return name;
+  return "?";
+}
+
+const char* PointNormName(PointNorm n) {
+  for (const auto& [name, value] : PointNormNames())
+    if (value == n) return name;
+  return "?";
 }
 UAVSIM_INSTANTIATE_VISIT(IbCcConfig);
 

@@ -5,6 +5,9 @@
 // torch-free; saved beside trained weights as a JSON sidecar.
 #pragma once
 
+#include <utility>
+#include <vector>
+
 #include "pipeline/node/ib_normalization.h"
 #include "pipeline/node/observations.h"
 
@@ -19,6 +22,20 @@ enum class IbBottleneck {
 enum class StereoBranches {
   kShared,  // one CNN runs on both eyes (ours: half the weights)
   kTwo,     // two parallel CNN branches, one per eye (the paper, Sec. IV-B)
+};
+
+// The frame the PointNet sees a cloud's points in (LiDAR and radar).
+enum class PointFrame {
+  kScene,     // normalised scene coordinates as they are (the paper)
+  kCentroid,  // relative to the cloud's centroid, the centroid joined to the
+              // pooled feature (ours: translation-equivariant features)
+};
+
+// The normalisation after each of the PointNet's convolutions.
+enum class PointNorm {
+  kBatch,  // BatchNorm over the batch's points (Table I, the paper)
+  kGroup,  // GroupNorm of each point's channels, 8 groups (ours)
+  kNone,   // none; the convolutions get a bias (ours)
 };
 
 struct IbCcConfig {
@@ -40,7 +57,17 @@ struct IbCcConfig {
   // ib_normalization.h) to h^c (ours); the paper's 128x128 crop alone carries
   // no bearing.
   bool roi_geometry = true;
+  // LiDAR and radar only; the defaults are the paper's design and the layout
+  // of models trained before these switches existed.
+  PointFrame point_frame = PointFrame::kScene;
+  PointNorm point_norm = PointNorm::kBatch;
 };
+
+// "scene" / "centroid"; "batch" / "group" / "none".
+const char* PointFrameName(PointFrame f);
+const char* PointNormName(PointNorm n);
+const std::vector<std::pair<const char*, PointFrame>>& PointFrameNames();
+const std::vector<std::pair<const char*, PointNorm>>& PointNormNames();
 
 template <class V>
 void Visit(V& v, IbCcConfig& c);

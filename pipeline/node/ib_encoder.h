@@ -92,35 +92,50 @@ TORCH_MODULE(ImageFeatureEncoder);
 //   MaxPool_global(H_5) in R^1024.
 // Only the real points are computed: they are packed into one sequence, so
 // padding affects neither the BatchNorm statistics nor the max. Input points
-// [B, C, N], mask [B, N]; output [B, 1024]. Every cloud needs at least one
-// real point, and in training the batch needs at least two (BatchNorm).
+// [B, C, N], mask [B, N]; output [B, features()]. Every cloud needs at least
+// one real point, and in training with BatchNorm the batch needs at least two.
 //
-// In eval mode under torch::NoGradGuard each BatchNorm is folded into the
-// convolution before it (the same affine map, one matrix product per layer).
-// The folded weights are cached until the next train()/eval() call or
-// load(); after changing weights in place while in eval mode, call eval()
-// again.
+// Switches (IbCcConfig; the defaults are the paper's): with
+// PointFrame::kCentroid each cloud's x, y, z (channels 0-2) are taken
+// relative to its centroid c (mean over its real points) and c is appended
+// to the pooled feature: [B, 1027], max-pooled features that do not move
+// when the cloud does, and the position in three numbers. PointNorm::kGroup
+// replaces each BatchNorm by a GroupNorm (8 groups) of each point's
+// channels, PointNorm::kNone drops it (the convolutions then get a bias):
+// either way a cloud's features do not depend on the rest of its batch.
+//
+// In eval mode under torch::NoGradGuard each BatchNorm (or bias) is folded
+// into the convolution before it (the same affine map, one matrix product
+// per layer). The folded weights are cached until the next train()/eval()
+// call or load(); after changing weights in place while in eval mode, call
+// eval() again. GroupNorm is not folded.
 class PointNetEncoderImpl : public torch::nn::Module {
  public:
   static constexpr std::int64_t kFeatures = 1024;
 
-  explicit PointNetEncoderImpl(std::int64_t in_channels);
+  explicit PointNetEncoderImpl(std::int64_t in_channels, PointFrame frame = PointFrame::kScene,
+                               PointNorm norm = PointNorm::kBatch);
 
   // Per-point features H_5 [P, 1024] of real points x [P, C] (one row each).
   torch::Tensor PointFeatures(const torch::Tensor& x);
   torch::Tensor forward(const torch::Tensor& points, const torch::Tensor& mask);
 
   std::int64_t in_channels() const { return in_channels_; }
+  std::int64_t features() const;
 
   void train(bool on = true) override;
   void load(torch::serialize::InputArchive& archive) override;
 
  private:
   torch::Tensor FoldedPointFeatures(torch::Tensor x);
+  torch::Tensor Pooled(const torch::Tensor& points, const torch::Tensor& mask);
 
   std::int64_t in_channels_;
+  PointFrame frame_;
+  PointNorm norm_;
   std::vector<torch::nn::Conv1d> convs_;
-  std::vector<torch::nn::BatchNorm1d> norms_;
+  std::vector<torch::nn::BatchNorm1d> norms_;       // kBatch
+  std::vector<torch::nn::GroupNorm> group_norms_;   // kGroup
   std::vector<torch::Tensor> folded_weight_, folded_bias_;  // eval-mode cache
 };
 TORCH_MODULE(PointNetEncoder);

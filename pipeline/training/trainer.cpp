@@ -120,6 +120,15 @@ void RunEpochs(torch::nn::Module& model, int max_epochs, int patience, const std
   report.best_validation_loss = stopping.best;
 }
 
+// ---- What an observation holds (DecoderScore) ----
+
+constexpr double kLidarHoldsTargetM = 1.0, kRadarHoldsTargetM = 3.0, kCameraHoldsTargetM = 1.0;
+
+Eigen::Vector3d PointAt(const PointObservation& p, std::size_t i) {
+  const float* v = &p.values[i * static_cast<std::size_t>(p.channels)];
+  return {v[0], v[1], v[2]};
+}
+
 // ---- Stage 1: one modality's IB-CC model on its observations ----
 
 // The samples of modality m captured in the episodes' scored windows
@@ -240,6 +249,8 @@ IbCcModel TrainEncoder(Modality m, const Dataset& data, const TrainOptions& o,
   config.stereo_branches = o.camera_stereo_branches;
   config.eye_pool_side = o.camera_eye_pool_side;
   config.roi_geometry = o.camera_roi_geometry;
+  config.point_frame = o.point_frame;
+  config.point_norm = o.point_norm;
   IbCcModel model(config);
   std::size_t dropped = 0;
   std::vector<const Sample*> train = TargetSamplesOf(data.train, m, o, &dropped);
@@ -653,12 +664,17 @@ std::map<std::string, DecoderScore> DecoderScores(std::vector<IbCcModel>& encode
                                                   const TeAlign& align) {
   torch::NoGradGuard no_grad;
   std::map<std::string, DecoderScore> out;
+  const auto rmse = [](double sum, std::size_t n) {
+    return n == 0 ? std::numeric_limits<double>::quiet_NaN()
+                  : std::sqrt(sum / static_cast<double>(n));
+  };
   for (int m = 0; m < kModalityCount; ++m) {
     IbCcModel& model = encoders[static_cast<std::size_t>(m)];
     model->eval();
     const IbNormalization& n = model->config().normalization;
     const std::vector<const Sample*> samples = SamplesOf(episodes, static_cast<Modality>(m), align);
-    double sum = 0.0;
+    double sum = 0.0, sum_on = 0.0, sum_off = 0.0, sum_trivial = 0.0;
+    DecoderScore& d = out[kPartNames[m]];
     for (std::size_t i = 0; i < samples.size(); i += 64) {
       PollStop();
       const std::vector<const Sample*> b(
@@ -669,14 +685,24 @@ std::map<std::string, DecoderScore> DecoderScores(std::vector<IbCcModel>& encode
               .to(torch::kFloat64)
               .contiguous();
       const double* p = y.data_ptr<double>();
-      for (std::size_t j = 0; j < b.size(); ++j)
-        sum += (DenormalizePosition({p[3 * j], p[3 * j + 1], p[3 * j + 2]}, n) - b[j]->truth_m)
-                   .squaredNorm();
+      for (std::size_t j = 0; j < b.size(); ++j) {
+        const double e2 =
+            (DenormalizePosition({p[3 * j], p[3 * j + 1], p[3 * j + 2]}, n) - b[j]->truth_m)
+                .squaredNorm();
+        sum += e2;
+        if (ObservationHoldsTarget(*b[j])) {
+          sum_on += e2, ++d.on_target;
+          sum_trivial += (TrivialEstimate(*b[j]) - b[j]->truth_m).squaredNorm();
+        } else {
+          sum_off += e2, ++d.off_target;
+        }
+      }
     }
-    DecoderScore& d = out[kPartNames[m]];
     d.observations = samples.size();
-    d.rmse_m = samples.empty() ? std::numeric_limits<double>::quiet_NaN()
-                               : std::sqrt(sum / static_cast<double>(samples.size()));
+    d.rmse_m = rmse(sum, samples.size());
+    d.on_target_rmse_m = rmse(sum_on, d.on_target);
+    d.off_target_rmse_m = rmse(sum_off, d.off_target);
+    d.centroid_on_target_m = rmse(sum_trivial, d.on_target);
   }
   return out;
 }
@@ -721,6 +747,8 @@ void CopyStage1Keys(const TrainingConfig& from, TrainingConfig& to) {
   to.camera_stereo_branches = from.camera_stereo_branches;
   to.camera_eye_pool_side = from.camera_eye_pool_side;
   to.camera_roi_geometry = from.camera_roi_geometry;
+  to.point_frame = from.point_frame;
+  to.point_norm = from.point_norm;
 }
 
 core::Json EvaluationJson(const Evaluation& ev) {
@@ -732,6 +760,32 @@ core::Json EvaluationJson(const Evaluation& ev) {
 }
 
 }  // namespace
+
+bool ObservationHoldsTarget(const Sample& s) {
+  if (s.camera) {
+    if (!s.camera->detected) return false;
+    const Eigen::Vector3d u = s.camera->bearing_left_w.normalized();
+    const Eigen::Vector3d to_truth = s.truth_m - s.camera->eye_left_w;
+    return to_truth.dot(u) > 0.0 && (to_truth - to_truth.dot(u) * u).norm() <= kCameraHoldsTargetM;
+  }
+  if (!s.points) return false;
+  const double radius =
+      s.modality == Modality::kLidar ? kLidarHoldsTargetM : kRadarHoldsTargetM;
+  for (std::size_t i = 0; i < s.points->count(); ++i)
+    if ((PointAt(*s.points, i) - s.truth_m).norm() <= radius) return true;
+  return false;
+}
+
+Eigen::Vector3d TrivialEstimate(const Sample& s) {
+  if (s.camera) {
+    const double range = (s.truth_m - s.camera->eye_left_w).norm();
+    return s.camera->eye_left_w + range * s.camera->bearing_left_w.normalized();
+  }
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  const std::size_t n = s.points ? s.points->count() : 0;
+  for (std::size_t i = 0; i < n; ++i) centroid += PointAt(*s.points, i);
+  return n ? Eigen::Vector3d(centroid / static_cast<double>(n)) : centroid;
+}
 
 std::map<std::string, Evaluation> OnCommonWindows(
     const std::map<std::string, Evaluation>& by_method) {
@@ -1026,10 +1080,14 @@ std::string ReportJson(const TrainReport& r, const TrainOptions& o) {
   for (const auto& [method, ev] : r.test) test[method] = EvaluationJson(ev);
   j["test"] = test;
   core::Json decoder = core::Json::object();
+  const auto number = [](double v) { return std::isfinite(v) ? core::Json(v) : core::Json(nullptr); };
   for (const auto& [modality, d] : r.test_decoder)
     decoder[modality] = {
-        {"rmse_m", std::isfinite(d.rmse_m) ? core::Json(d.rmse_m) : core::Json(nullptr)},
-        {"observations", d.observations}};
+        {"rmse_m", number(d.rmse_m)},
+        {"observations", d.observations},
+        {"on_target", {{"rmse_m", number(d.on_target_rmse_m)}, {"observations", d.on_target}}},
+        {"off_target", {{"rmse_m", number(d.off_target_rmse_m)}, {"observations", d.off_target}}},
+        {"centroid_on_target_m", number(d.centroid_on_target_m)}};
   j["test_decoder"] = decoder;
   core::Json by_weather = core::Json::object();
   for (const auto& [method, weathers] : r.test_by_weather)

@@ -113,10 +113,27 @@ struct StageReport {
   double seconds = 0.0;
 };
 
+// One modality's IB decoder alone on held-out observations, beside the
+// information limit of its own input (issue 41). An observation is on
+// target when it holds the target: a point within 1 m (LiDAR) or 3 m
+// (radar) of the truth at its time stamp, a camera ROI whose left ray
+// passes within 1 m of it (ObservationHoldsTarget).
 struct DecoderScore {
-  double rmse_m = 0.0;  // nan without observations
+  double rmse_m = 0.0;  // every observation; nan without observations
   std::size_t observations = 0;
+  double on_target_rmse_m = 0.0, off_target_rmse_m = 0.0;  // nan without any
+  std::size_t on_target = 0, off_target = 0;
+  // The trivial estimator on the same on-target observations: the cloud's
+  // centroid; for the camera, the point of the left ray at the true range
+  // from the left eye (what the ray alone knows). nan without any.
+  double centroid_on_target_m = 0.0;
 };
+
+// Whether an observation holds the target (DecoderScore's definition).
+bool ObservationHoldsTarget(const Sample& s);
+// DecoderScore's trivial estimate for an observation: the cloud's centroid,
+// or the camera ray's point at the true range.
+Eigen::Vector3d TrivialEstimate(const Sample& s);
 
 // DecoderScore of each modality's encoder-decoder of a saved model (the
 // folder or its model.json) on episodes. Call InitTorch() first.

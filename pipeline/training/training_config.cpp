@@ -52,6 +52,8 @@ void Visit(V& v, TrainingConfig& c) {
       c.camera_eye_pool_side == 0 || 32 % c.camera_eye_pool_side == 0, "camera_eye_pool_side",
       "expected 0 (no pooling) or a divisor of 32, got " + std::to_string(c.camera_eye_pool_side));
   v("camera_roi_geometry", c.camera_roi_geometry);
+  v.Enum("point_frame", c.point_frame, PointFrameNames());
+  v.Enum("point_norm", c.point_norm, PointNormNames());
   v("selection_weight", c.selection_weight, Rule::NonNegative(100));
   v("selection_radius_m", c.selection_radius_m, Rule::Positive(1e4));
   v("filter_preference_m", c.filter_preference_m, Rule::NonNegative(100));

@@ -83,6 +83,12 @@ struct TrainingConfig {
   StereoBranches camera_stereo_branches = StereoBranches::kShared;
   int camera_eye_pool_side = 4;
   bool camera_roi_geometry = true;
+  // The LiDAR's and radar's PointNet (IbCcConfig): points in the scene frame
+  // (the paper) or relative to their centroid, the centroid joined to the
+  // pooled feature (ours); BatchNorm after each convolution (the paper),
+  // GroupNorm of each point's channels, or none (ours).
+  PointFrame point_frame = PointFrame::kScene;
+  PointNorm point_norm = PointNorm::kBatch;
   // Anchored head: weight of the candidate-selection loss added to the
   // position loss, the cross-entropy of the candidate weights against the
   // valid candidate nearest the truth when it is within selection_radius_m,
@@ -117,7 +123,8 @@ struct TrainingConfig {
 
 // The JSON keys are the field names, except mixture_loss ("position_loss":
 // "mixture" | "mean"); camera_stereo_branches is "shared" | "two"; temporal "mamba" | "gru" |
-// "lstm" | "tcn"; alignment "te_align" | "first" | "middle" | "random"; fusion "uavloc" |
+// "lstm" | "tcn"; point_frame "scene" | "centroid"; point_norm "batch" | "group" | "none";
+// alignment "te_align" | "first" | "middle" | "random"; fusion "uavloc" |
 // "early" | "late" | "hemis" (a fusion baseline needs madw and mica true). Each rule is checked
 // when reading.
 template <class V>

@@ -295,6 +295,61 @@ TEST_CASE("PointNetEncoder: eval-mode BatchNorm folding equals Conv1d, BN, ReLU"
   CHECK(torch::allclose(enc->forward(x, mask), reference(x), 1e-4, 1e-5));
 }
 
+TEST_CASE("PointNetEncoder: the centroid frame's features do not move with the cloud",
+          "[pipeline]") {
+  InitTorch(1, 17);
+  for (PointNorm norm : {PointNorm::kBatch, PointNorm::kGroup, PointNorm::kNone}) {
+    INFO(PointNormName(norm));
+    PointNetEncoder enc(4, PointFrame::kCentroid, norm);
+    CHECK(enc->features() == 1027);
+    // Two clouds of 7 and 12 points, padded to 12; channel 3 (intensity) kept.
+    torch::Tensor x = torch::randn({2, 4, 12});
+    torch::Tensor mask = torch::ones({2, 12}, torch::kBool);
+    mask[0].slice(0, 7).fill_(false);
+    const torch::Tensor shift = torch::tensor({3.0f, -2.0f, 0.5f});
+    torch::Tensor moved = x.clone();
+    moved.narrow(1, 0, 3).add_(shift.view({1, 3, 1}));
+    torch::NoGradGuard no_grad;
+    for (bool training : {true, false}) {
+      enc->train(training);
+      const torch::Tensor a = enc->forward(x, mask), b = enc->forward(moved, mask);
+      CHECK(torch::allclose(a.narrow(1, 0, 1024), b.narrow(1, 0, 1024), 1e-4, 1e-5));
+      // The appended centroid is the real points' mean, and moves with them.
+      const torch::Tensor c0 = x[0].narrow(0, 0, 3).narrow(1, 0, 7).mean(1);
+      CHECK(torch::allclose(a[0].narrow(0, 1024, 3), c0, 1e-5, 1e-6));
+      CHECK(torch::allclose(b.narrow(1, 1024, 3) - a.narrow(1, 1024, 3),
+                            shift.view({1, 3}).expand({2, 3}), 1e-4, 1e-5));
+    }
+  }
+  // The scene frame (the paper's) does move: the check above can fail.
+  PointNetEncoder scene(4);
+  scene->eval();
+  torch::NoGradGuard no_grad;
+  const torch::Tensor x = torch::randn({1, 4, 9});
+  torch::Tensor moved = x.clone();
+  moved.narrow(1, 0, 3).add_(2.0);
+  const torch::Tensor m = torch::ones({1, 9}, torch::kBool);
+  CHECK_FALSE(torch::allclose(scene->forward(x, m), scene->forward(moved, m), 1e-4, 1e-5));
+}
+
+TEST_CASE("PointNetEncoder: with GroupNorm or no norm a cloud's features ignore its batch",
+          "[pipeline]") {
+  InitTorch(1, 18);
+  for (PointNorm norm : {PointNorm::kGroup, PointNorm::kNone}) {
+    INFO(PointNormName(norm));
+    PointNetEncoder enc(5, PointFrame::kScene, norm);
+    enc->train();  // BatchNorm would mix the batch here
+    torch::NoGradGuard no_grad;
+    const torch::Tensor a = torch::randn({1, 5, 6}), b = torch::randn({1, 5, 6}) * 5.0;
+    const torch::Tensor m1 = torch::ones({1, 6}, torch::kBool);
+    const torch::Tensor both = enc->forward(torch::cat({a, b}, 0), torch::ones({2, 6}, torch::kBool));
+    CHECK(torch::allclose(both[0], enc->forward(a, m1)[0], 1e-5, 1e-6));
+    // Eval mode (folded for kNone) gives the same as the module path.
+    enc->eval();
+    CHECK(torch::allclose(enc->forward(a, m1), both.narrow(0, 0, 1), 1e-4, 1e-5));
+  }
+}
+
 TEST_CASE("PointNetEncoder: bad inputs are refused with a message", "[pipeline]") {
   InitTorch(1, 9);
   PointNetEncoder enc(5);
