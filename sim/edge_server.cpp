@@ -75,6 +75,19 @@ core::Json ExtensionsOf(const pipeline::ModelManifest& m) {
   return ext;
 }
 
+// Where the scenario's sensing nodes depart from the paper's pre-processing
+// (Sec. IV-A): the switches of ours that are on (the model was trained on
+// them: the layout hash says so), as "key=value".
+core::Json NodeExtensionsOf(const pipeline::PreprocessConfig& p) {
+  core::Json ext = core::Json::array();
+  if (p.lidar.weather_echo_rejection) ext.push_back("lidar.weather_echo_rejection=true");
+  if (p.radar.rain_doppler_rejection) ext.push_back("radar.rain_doppler_rejection=true");
+  if (p.radar.selection != pipeline::RadarSelection::kLargest)
+    ext.push_back(std::string("radar.selection=") +
+                  pipeline::RadarSelectionName(p.radar.selection));
+  return ext;
+}
+
 // The model's temporal regressor ("mamba", the paper's, or one of its
 // baselines); models without a recorded config predate the choice: "mamba".
 const char* TemporalOf(const pipeline::ModelManifest& m) {
@@ -111,6 +124,9 @@ std::unique_ptr<pipeline::UavLocModelFiles> LoadModel(const Scenario& s, const s
           {"same_layout", same_layout},
           {"heads", heads},
           {"extensions", ExtensionsOf(m)}};
+  if (info["extensions"].is_array())
+    for (const core::Json& e : NodeExtensionsOf(s.pipeline.preprocess))
+      info["extensions"].push_back(e);
   info["temporal"] = TemporalOf(m);
   return model;
 }

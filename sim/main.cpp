@@ -661,6 +661,12 @@ int Train(int argc, char** argv) {
             "obs.)\n",
             modality.c_str(), d.on_target_rmse_m, d.on_target, d.centroid_on_target_m,
             d.off_target_rmse_m, d.off_target);
+      std::printf("held-out observations holding the target (of those sent):");
+      for (const auto& [modality, weathers] : r.test_sent)
+        for (const auto& [weather, c] : weathers)
+          std::printf(" %s/%s %zu of %zu", modality.c_str(), weather.c_str(), c.holding_target,
+                      c.sent);
+      std::printf("\n");
     }
     if (r.test_common.size() > 1) {
       std::size_t fewest = ~std::size_t{0}, most = 0;

@@ -204,8 +204,7 @@ torch::Tensor ImageFeatureEncoderImpl::forward(const torch::Tensor& left,
   return roi_geometry_ ? torch::cat({h_c, geometry}, 1) : h_c;
 }
 
-PointNetEncoderImpl::PointNetEncoderImpl(std::int64_t in_channels, PointFrame frame,
-                                         PointNorm norm)
+PointNetEncoderImpl::PointNetEncoderImpl(std::int64_t in_channels, PointFrame frame, PointNorm norm)
     : in_channels_(in_channels), frame_(frame), norm_(norm) {
   if (in_channels < 1)
     throw std::invalid_argument("PointNetEncoder: in_channels must be >= 1, got " +
@@ -219,12 +218,13 @@ PointNetEncoderImpl::PointNetEncoderImpl(std::int64_t in_channels, PointFrame fr
     // No conv bias before a BatchNorm or GroupNorm: their shift absorbs it.
     convs_.push_back(register_module(
         "conv" + k,
-        torch::nn::Conv1d(torch::nn::Conv1dOptions(in, widths[l], 1).bias(norm == PointNorm::kNone))));
+        torch::nn::Conv1d(
+            torch::nn::Conv1dOptions(in, widths[l], 1).bias(norm == PointNorm::kNone))));
     if (norm == PointNorm::kBatch)
       norms_.push_back(register_module("bn" + k, torch::nn::BatchNorm1d(widths[l])));
     if (norm == PointNorm::kGroup)
-      group_norms_.push_back(
-          register_module("gn" + k, torch::nn::GroupNorm(torch::nn::GroupNormOptions(8, widths[l]))));
+      group_norms_.push_back(register_module(
+          "gn" + k, torch::nn::GroupNorm(torch::nn::GroupNormOptions(8, widths[l]))));
     in = widths[l];
   }
 }

@@ -134,8 +134,8 @@ class PointNetEncoderImpl : public torch::nn::Module {
   PointFrame frame_;
   PointNorm norm_;
   std::vector<torch::nn::Conv1d> convs_;
-  std::vector<torch::nn::BatchNorm1d> norms_;       // kBatch
-  std::vector<torch::nn::GroupNorm> group_norms_;   // kGroup
+  std::vector<torch::nn::BatchNorm1d> norms_;               // kBatch
+  std::vector<torch::nn::GroupNorm> group_norms_;           // kGroup
   std::vector<torch::Tensor> folded_weight_, folded_bias_;  // eval-mode cache
 };
 TORCH_MODULE(PointNetEncoder);

@@ -263,6 +263,13 @@ IbCcModel TrainEncoder(Modality m, const Dataset& data, const TrainOptions& o,
     for (std::size_t i = 0; i < train.size(); ++i) (i % 7 == 6 ? val : kept).push_back(train[i]);
     train = std::move(kept);
   }
+  // Early stopping on the validation observations that hold the target
+  // (issue 41): an observation of clutter has no position to learn, and its
+  // noise label would flatten the curve. All of them if none does.
+  std::vector<const Sample*> val_on_target;
+  for (const Sample* s : val)
+    if (ObservationHoldsTarget(*s)) val_on_target.push_back(s);
+  if (!val_on_target.empty()) val = std::move(val_on_target);
   val = EvenSubset(val, o.stage1_max_validation_samples);
   report.name = kPartNames[static_cast<int>(m)];
   report.train_items = train.size();
@@ -769,8 +776,7 @@ bool ObservationHoldsTarget(const Sample& s) {
     return to_truth.dot(u) > 0.0 && (to_truth - to_truth.dot(u) * u).norm() <= kCameraHoldsTargetM;
   }
   if (!s.points) return false;
-  const double radius =
-      s.modality == Modality::kLidar ? kLidarHoldsTargetM : kRadarHoldsTargetM;
+  const double radius = s.modality == Modality::kLidar ? kLidarHoldsTargetM : kRadarHoldsTargetM;
   for (std::size_t i = 0; i < s.points->count(); ++i)
     if ((PointAt(*s.points, i) - s.truth_m).norm() <= radius) return true;
   return false;
@@ -976,6 +982,14 @@ TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& o, const ModelM
   }
 
   if (!data.test.empty()) report.test_decoder = DecoderScores(encoders, data.test, align);
+  for (const Episode& e : data.test)
+    for (const Sample& smp : e.samples)
+      for (const std::string& w : {std::string("all"), WeatherOf(e)}) {
+        TrainReport::SentCounts& c =
+            report.test_sent[kPartNames[static_cast<int>(smp.modality)]][w];
+        ++c.sent;
+        c.holding_target += ObservationHoldsTarget(smp);
+      }
   WriteTestEstimates(report, (out / "test_estimates.csv").string());
   report.test_common = OnCommonWindows(report.test);
   {
@@ -1080,7 +1094,9 @@ std::string ReportJson(const TrainReport& r, const TrainOptions& o) {
   for (const auto& [method, ev] : r.test) test[method] = EvaluationJson(ev);
   j["test"] = test;
   core::Json decoder = core::Json::object();
-  const auto number = [](double v) { return std::isfinite(v) ? core::Json(v) : core::Json(nullptr); };
+  const auto number = [](double v) {
+    return std::isfinite(v) ? core::Json(v) : core::Json(nullptr);
+  };
   for (const auto& [modality, d] : r.test_decoder)
     decoder[modality] = {
         {"rmse_m", number(d.rmse_m)},
@@ -1089,6 +1105,11 @@ std::string ReportJson(const TrainReport& r, const TrainOptions& o) {
         {"off_target", {{"rmse_m", number(d.off_target_rmse_m)}, {"observations", d.off_target}}},
         {"centroid_on_target_m", number(d.centroid_on_target_m)}};
   j["test_decoder"] = decoder;
+  core::Json sent = core::Json::object();
+  for (const auto& [modality, weathers] : r.test_sent)
+    for (const auto& [weather, c] : weathers)
+      sent[modality][weather] = {{"sent", c.sent}, {"holding_target", c.holding_target}};
+  j["test_sent"] = sent;
   core::Json by_weather = core::Json::object();
   for (const auto& [method, weathers] : r.test_by_weather)
     for (const auto& [weather, ev] : weathers) by_weather[method][weather] = EvaluationJson(ev);

@@ -162,6 +162,13 @@ struct TrainReport {
   // the capture, over the observations of that modality in scored windows
   // (sent on time or not: it is the node's own estimate); by modality name.
   std::map<std::string, DecoderScore> test_decoder;
+  // What the nodes sent on the held-out flights, by modality and weather
+  // ("all" and WeatherOf's names): observations, and those holding the
+  // target (ObservationHoldsTarget).
+  struct SentCounts {
+    std::size_t sent = 0, holding_target = 0;
+  };
+  std::map<std::string, std::map<std::string, SentCounts>> test_sent;
   std::map<std::string, std::map<std::string, Evaluation>> test_by_weather_common;
 };
 

@@ -262,6 +262,19 @@ TEST_CASE(
     csvs[a] = ReadFile(out + "/" + a + ".csv");
     CHECK(ReadFile(out + "/" + a + ".png").substr(1, 3) == "PNG");
   }
+  // Figs. 7-9 draw the information limit beside the schemes: the paper
+  // arm's decoder on the observations holding the target and their centroid.
+  for (const char* f : {"fig07_camera_z", "fig08_lidar_z", "fig09_radar_z"}) {
+    INFO(f);
+    int centroid = 0, on_target = 0;
+    for (const auto& row : CsvRows(out + "/" + f + "_limit.csv")) {
+      if (row[1] == "centroid on target") ++centroid, CHECK(std::stod(row[2]) >= 0.0);
+      if (row[1] == "IB on target") ++on_target;
+    }
+    CHECK(centroid == 3);  // one per latent size of the quick plan
+    CHECK(on_target == 3);
+    CHECK(ReadFile(out + "/" + f + ".csv").find("on target") == std::string::npos);
+  }
   // Tab. IV: the four cases with the paper's values; Fig. 15: the perfect
   // beam and one per subset, each at every SNR of the grid.
   const auto t4 = CsvRows(out + "/table4_camera_preprocessing.csv");

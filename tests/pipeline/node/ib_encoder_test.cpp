@@ -342,7 +342,8 @@ TEST_CASE("PointNetEncoder: with GroupNorm or no norm a cloud's features ignore 
     torch::NoGradGuard no_grad;
     const torch::Tensor a = torch::randn({1, 5, 6}), b = torch::randn({1, 5, 6}) * 5.0;
     const torch::Tensor m1 = torch::ones({1, 6}, torch::kBool);
-    const torch::Tensor both = enc->forward(torch::cat({a, b}, 0), torch::ones({2, 6}, torch::kBool));
+    const torch::Tensor both =
+        enc->forward(torch::cat({a, b}, 0), torch::ones({2, 6}, torch::kBool));
     CHECK(torch::allclose(both[0], enc->forward(a, m1)[0], 1e-5, 1e-6));
     // Eval mode (folded for kNone) gives the same as the module path.
     enc->eval();

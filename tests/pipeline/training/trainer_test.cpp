@@ -879,17 +879,44 @@ TEST_CASE("Trainer: each node's IB decoder alone is scored on the held-out obser
   for (int m = 0; m < 3; ++m) {
     INFO(parts[m]);
     const auto node = NodeEncoder::Load(t.dir + "/" + parts[m] + ".json");
-    double sum = 0.0;
-    std::size_t n = 0;
+    double sum = 0.0, sum_on = 0.0, sum_centroid = 0.0;
+    std::size_t n = 0, on = 0;
     for (const Episode& e : Synthetic().test)
       for (const Sample& s : e.samples) {
         if (static_cast<int>(s.modality) != m) continue;
         const std::vector<float> mu = s.camera ? node->Encode(*s.camera) : node->Encode(*s.points);
-        sum += (node->DecodePosition(mu) - s.truth_m).squaredNorm();
+        const double e2 = (node->DecodePosition(mu) - s.truth_m).squaredNorm();
+        sum += e2;
         ++n;
+        // On target by the definition written out here: a point within 1 m
+        // (radar 3 m) of the truth, a camera ray passing within 1 m.
+        bool holds = false;
+        Eigen::Vector3d trivial = Eigen::Vector3d::Zero();
+        if (s.camera) {
+          const Eigen::Vector3d u = s.camera->bearing_left_w.normalized();
+          const Eigen::Vector3d d = s.truth_m - s.camera->eye_left_w;
+          holds = s.camera->detected && d.dot(u) > 0 && d.cross(u).norm() <= 1.0;
+          trivial = s.camera->eye_left_w + d.norm() * u;
+        } else {
+          const double radius = m == 1 ? 1.0 : 3.0;
+          for (std::size_t i = 0; i < s.points->count(); ++i) {
+            const Eigen::Vector3d p(s.points->values[i * s.points->channels],
+                                    s.points->values[i * s.points->channels + 1],
+                                    s.points->values[i * s.points->channels + 2]);
+            holds = holds || (p - s.truth_m).norm() <= radius;
+            trivial += p / static_cast<double>(s.points->count());
+          }
+        }
+        if (holds) ++on, sum_on += e2, sum_centroid += (trivial - s.truth_m).squaredNorm();
       }
     const DecoderScore& d = t.report.test_decoder.at(parts[m]);
     CHECK(d.observations == n);
+    CHECK(d.on_target == on);
+    CHECK(d.on_target + d.off_target == n);
+    if (on > 0) {
+      CHECK(d.on_target_rmse_m == Approx(std::sqrt(sum_on / on)).epsilon(1e-4));
+      CHECK(d.centroid_on_target_m == Approx(std::sqrt(sum_centroid / on)).epsilon(1e-6));
+    }
     REQUIRE(n > 0);
     CHECK(d.rmse_m == Approx(std::sqrt(sum / static_cast<double>(n))).epsilon(1e-4));
     // The saved model scores the same.
