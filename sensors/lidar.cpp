@@ -34,8 +34,10 @@ constexpr double kMid360ElevationHz = 2236.0679774997897;  // 1000 x sqrt(5)
 constexpr double kMinDropMm = 0.05;  // LISA's smallest sampled drop; MP is wrong below
 constexpr double kMaxDropMm = 10.0;  // drops break up above ~8 mm
 
-// Faded fog echoes more than this many times their mean have probability
-// e^-60: the fog profile is tabulated only where it could still be detected.
+// A fog echo faded to more than this many times its mean has probability
+// e^-60 with one speckle cell and less with more (Chernoff: below
+// exp(-M (60 - 1 - ln 60))): the fog profile is tabulated only where it
+// could still be detected.
 constexpr double kMaxFade = 60.0;
 
 // Transmitter/receiver overlap xi(r) of a biaxial sensor (Hahner et al.,
@@ -147,6 +149,7 @@ Lidar::Lidar(const LidarConfig& config, RaycastScene& scene) : config_(config), 
   Require(c.dropout >= 0.0 && c.dropout < 1.0, "dropout must be in [0, 1)");
   Require(c.saturation_range_m > 0.0 && c.pulse_width_ns > 0.0 && c.beam_divergence_mrad > 0.0,
           "saturation_range_m, pulse_width_ns and beam_divergence_mrad must be positive");
+  Require(c.receiver_aperture_mm > 0.0, "receiver_aperture_mm must be positive");
   Require(c.time_slices_per_frame >= 1, "time_slices_per_frame must be at least 1");
   Require(c.RaysPerFrame() >= 1.0 && c.RaysPerFrame() <= 1e9,
           "a frame must cast between 1 and 1e9 rays");
@@ -306,6 +309,7 @@ PointCloudFrame Lidar::Capture(double t_start_s, const core::WeatherConfig& weat
   const double p_th = threshold_;
   const double r_lim = ray_length_m_;
   const double r_lo = std::max(c.min_range_m, 0.01);
+  const double speckle_cells = FogSpeckleCells(c);
 
   Atmosphere atm;
   atm.alpha_per_m = AtmosphericExtinctionPerM(weather);
@@ -363,7 +367,7 @@ PointCloudFrame Lidar::Capture(double t_start_s, const core::WeatherConfig& weat
     };
     if (atm.fog) {
       const RangeTable& f = atm.fog_echo;
-      const double fade = rng.Exponential(1.0);
+      const double fade = FogSpeckleFade(speckle_cells, rng);
       const double level = p_th / fade;
       if (f.value[atm.fog_peak] >= level) {
         // S rises to its peak and falls after it: the part above `level` is

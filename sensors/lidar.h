@@ -61,10 +61,19 @@
 //    beta = 0.046 / V (1/(m sr), Rasshofer et al. 2011) gives one range cell
 //    of fog the reflectivity rho_v = pi beta c tau / 2 (tau = pulse width),
 //    so its mean echo is S(r) = rho_v xi(r) exp(-2 alpha r) / r^2. The echo
-//    of many droplets is fully developed speckle, so a beam's echo is E S(r)
-//    with E ~ Exp(1): detected with probability exp(-P_th / max S), which
-//    grows with alpha. Its range is drawn from S over the part of the
-//    profile above the threshold, in front of any target.
+//    of many droplets is fully developed speckle, and a direct-detection
+//    receiver sums the independent speckle cells its aperture intercepts,
+//    M = max(1, (D theta / lambda)^2) of them (D = receiver_aperture_mm,
+//    theta = beam_divergence_mrad, lambda = 905 nm; the order of magnitude
+//    of Goodman's integrated speckle, Speckle Phenomena in Optics, 2007).
+//    So a beam's echo is E S(r) with E ~ Gamma(M, 1/M), mean 1, variance
+//    1 / M, drawn once per beam from its own stream (FogSpeckleFade). It is
+//    detected with probability P(E >= P_th / max S) = Q(M, M P_th / max S)
+//    (regularised upper incomplete gamma); for M of thousands a step in
+//    visibility: a beam with no nearer target finds a fog echo where
+//    max S >= P_th and almost never where max S is below. Its range is
+//    drawn from S over the part of the profile above P_th / E, in front of
+//    any target.
 //  - rain (LISA, Kilic et al. 2021): drops in the beam's cone (full angle
 //    beam_divergence_mrad) form a Poisson process; a drop of diameter D at r
 //    returns P = 0.02 min((D / (theta r))^2, 1) xi(r) exp(-2 alpha r) / r^2

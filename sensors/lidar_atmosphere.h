@@ -11,6 +11,7 @@
 #pragma once
 
 #include "sensors/lidar_config.h"
+#include "sim/core/rng.h"
 #include "sim/core/weather.h"
 
 namespace uavsim::sensors {
@@ -42,6 +43,17 @@ double LidarPowerOfIntensity(const LidarConfig& c, double intensity);
 // Mean fog echo S(r) = rho_v xi(r) exp(-2 alpha r) / r^2 with rho_v =
 // pi beta c tau / 2 (one range cell of fog, Hahner et al. 2021); 0 without fog.
 double FogEchoMeanPower(const LidarConfig& c, const core::WeatherConfig& w, double range_m);
+// Speckle cells a beam's fog echo sums: M = max(1, (D theta / lambda)^2),
+// D = receiver_aperture_mm, theta = beam_divergence_mrad (full angle),
+// lambda = 905 nm (lidar.h). 1 when the aperture is below one speckle cell.
+double FogSpeckleCells(const LidarConfig& c);
+// One beam's fog echo in units of its mean, the sum of M independent
+// fully developed speckle cells: Gamma(M, 1/M), mean 1, variance 1 / M
+// (Goodman 2007, integrated speckle). Marsaglia & Tsang's (2000) method on
+// `rng` (normal and uniform draws only): deterministic for a given stream.
+// Requires M >= 1.
+double FogSpeckleFade(double cells, core::RngStream& rng);
+
 // The strongest echo a raindrop can return at r, a drop filling the beam:
 // kWaterFresnel xi(r) exp(-2 alpha r) / r^2 (LISA, Kilic et al. 2021); 0 without rain.
 double RainEchoMaxPower(const LidarConfig& c, const core::WeatherConfig& w, double range_m);

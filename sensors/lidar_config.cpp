@@ -56,6 +56,7 @@ void Visit(V& v, LidarConfig& c) {
   v("saturation_range_m", c.saturation_range_m, Rule::Positive(10000.0));
   v("pulse_width_ns", c.pulse_width_ns, Rule::Positive(1000.0));
   v("beam_divergence_mrad", c.beam_divergence_mrad, Rule::Positive(100.0));
+  v("receiver_aperture_mm", c.receiver_aperture_mm, Rule::Positive(1000.0));
   v.Enum("return_mode", c.return_mode,
          {{"strongest", LidarReturnMode::kStrongest}, {"last", LidarReturnMode::kLast}});
   v("time_slices_per_frame", c.time_slices_per_frame, Rule::Range(1, 100000));

@@ -69,6 +69,14 @@ struct LidarConfig {
   double saturation_range_m = 5.0;
   double pulse_width_ns = 5.0;        // sets the fog echo's energy (one range cell c*tau/2)
   double beam_divergence_mrad = 3.0;  // full angle; sets the rain drops a beam meets (LISA)
+  // Diameter of the receiver's collecting aperture. It sets how many speckle
+  // cells of a fog echo the detector sums, M = max(1, (D theta / lambda)^2)
+  // with theta = beam_divergence_mrad (lidar.h), so how far a beam's fog
+  // echo can stray from its mean. 25 mm is our estimate for a compact
+  // Livox/Velodyne-class unit (receive lenses of one to a few centimetres
+  // behind windows a few centimetres wide), not a published figure; any
+  // D of 5-50 mm gives M of about 270-27 000, all near the mean.
+  double receiver_aperture_mm = 25.0;
   LidarReturnMode return_mode = LidarReturnMode::kStrongest;
   // The scene is re-posed this many times per sweep (moving objects are
   // frozen within a slice of 1 / (rate_hz * time_slices_per_frame) s: 2.8 ms,

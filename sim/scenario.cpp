@@ -498,7 +498,16 @@ std::string LayoutHash(const Scenario& s) {
     if (preprocess.contains(p) && preprocess.at(p) == value)
       preprocess.at(p.parent_pointer()).erase(p.back());
   }
-  const std::string text = j.at("world").dump() + j.at("nodes").dump() + preprocess.dump();
+  // Sensor keys added later, likewise: left out at their defaults.
+  core::Json nodes = j.at("nodes");
+  const double aperture_mm = sensors::LidarConfig{}.receiver_aperture_mm;
+  for (core::Json& node : nodes) {
+    if (!node.contains("sensor") || !node["sensor"].is_object()) continue;
+    core::Json& sensor = node["sensor"];
+    if (sensor.contains("receiver_aperture_mm") && sensor["receiver_aperture_mm"] == aperture_mm)
+      sensor.erase("receiver_aperture_mm");
+  }
+  const std::string text = j.at("world").dump() + nodes.dump() + preprocess.dump();
   std::uint64_t h = 1469598103934665603ull;  // FNV-1a 64
   for (unsigned char ch : text) h = (h ^ ch) * 1099511628211ull;
   char buf[17];

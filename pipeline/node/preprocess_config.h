@@ -69,10 +69,13 @@ struct LidarPreprocessConfig {
   // Weather echoes (ours, off by default until the shipped models are
   // retrained on it; the paper's background subtraction keeps them):
   // a return whose received power fog or rain backscatter at its range could
-  // reach is not the target (lidar_preprocessor.h). Fog echoes fade
-  // exponentially (speckle), so one reaches fog_echo_margin times its mean
-  // with probability e^-margin; a raindrop returns at most the power of a
-  // drop filling the beam, and rain_echo_margin covers the range noise.
+  // reach is not the target (lidar_preprocessor.h). A fog echo's speckle
+  // fade is Gamma(M, 1/M) (sensors/lidar.h; M speckle cells, >= 1), so it
+  // reaches fog_echo_margin m times its mean with probability e^-m at M = 1
+  // (one cell, the worst case) and below exp(-M (m - 1 - ln m)) (Chernoff)
+  // for any M: 20 holds for every receiver aperture, and is far from tight
+  // at the default M of thousands. A raindrop returns at most the power of
+  // a drop filling the beam, and rain_echo_margin covers the range noise.
   bool weather_echo_rejection = false;
   double fog_echo_margin = 20.0;
   double rain_echo_margin = 1.2;

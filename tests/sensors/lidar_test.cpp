@@ -332,9 +332,12 @@ TEST_CASE("Lidar: backscatter echoes appear only in weather, near the sensor", "
   CHECK(ranges.back() < 30.0);
   CHECK(ranges[ranges.size() / 2] < c.full_overlap_range_m);
 
+  // Light haze: at 2 km the mean echo peaks at ~0.6 P_th (at 2 m, where the
+  // overlap ramp meets 1/r^2), and a fade summing ~6900 speckle cells
+  // (lidar.h) never reaches the 1.7 times its mean that would take.
   WeatherConfig light_fog;
-  light_fog.fog_visibility_m = 1000.0;
-  CHECK(CaptureOnce(c, w, light_fog).spurious < foggy.spurious);  // grows with alpha
+  light_fog.fog_visibility_m = 2000.0;
+  CHECK(CaptureOnce(c, w, light_fog).spurious == 0);
 
   WeatherConfig rain;
   rain.rain_mm_h = 50.0;

@@ -211,8 +211,9 @@ TEST_CASE("Scenario: a mesh city is loaded and checked by validation, the line n
 }
 
 // The layout hash says whether a model was trained on this world, these nodes
-// and this pre-processing; keys added since keep the hash of a scenario at
-// their defaults, so the shipped models (trained before) still match.
+// and this pre-processing; keys added since (pre-processing keys, and the
+// LiDAR's receiver_aperture_mm) keep the hash of a scenario at their
+// defaults, so the shipped models (trained before) still match.
 TEST_CASE("Scenario: pre-processing keys added later keep shipped models' layout hash", "[sim]") {
   for (const char* name : {"default", "mmaud_twin"}) {
     INFO(name);
@@ -224,9 +225,10 @@ TEST_CASE("Scenario: pre-processing keys added later keep shipped models' layout
     CHECK(uavsim::sim::LayoutHash(s) == manifest.at("layout_hash").get<std::string>());
   }
   const Scenario d = LoadScenario(kScenarios + "/default.json");
-  for (const char* set : {"/pipeline/preprocess/radar/selection=\"persistent\"",
-                          "/pipeline/preprocess/lidar/weather_echo_rejection=true",
-                          "/pipeline/preprocess/radar/gate_m=3"}) {
+  for (const char* set :
+       {"/pipeline/preprocess/radar/selection=\"persistent\"",
+        "/pipeline/preprocess/lidar/weather_echo_rejection=true",
+        "/pipeline/preprocess/radar/gate_m=3", "/nodes/1/sensor/receiver_aperture_mm=10"}) {
     INFO(set);
     CHECK(uavsim::sim::LayoutHash(LoadScenario(kScenarios + "/default.json", {set})) !=
           uavsim::sim::LayoutHash(d));

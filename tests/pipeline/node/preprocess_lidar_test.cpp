@@ -240,7 +240,8 @@ TEST_CASE("LidarPreprocessor: fog and rain echoes are dropped, hard targets kept
   core::WeatherConfig fog;
   fog.fog_visibility_m = 300.0;
   const double alpha_fog = 3.912 / 300.0;  // Kim et al.: q = 0 below 500 m
-  // Fog echoes fade as Exp(1): 15 times the mean is a fog echo (kept only past 20).
+  // A fog echo's speckle fade is Gamma(M, 1/M), widest (Exp(1)) at M = 1:
+  // 15 times the mean is a fog echo (kept only past 20).
   CHECK_FALSE(judge(fog, Return(8.0, 15.0 * FogMean(300.0, alpha_fog, 8.0))));
   CHECK(judge(fog, Return(8.0, 25.0 * FogMean(300.0, alpha_fog, 8.0))));
   // A drone (10 % at 905 nm, the world's drone material) at 30 m, head-on:
