@@ -268,7 +268,10 @@ TEST_CASE(
     INFO(f);
     int centroid = 0, on_target = 0;
     for (const auto& row : CsvRows(out + "/" + f + "_limit.csv")) {
-      if (row[1] == "centroid on target") ++centroid, CHECK(std::stod(row[2]) >= 0.0);
+      if (row[1] == "centroid on target") {
+        ++centroid;
+        CHECK(std::stod(row[2]) >= 0.0);
+      }
       if (row[1] == "IB on target") ++on_target;
     }
     CHECK(centroid == 3);  // one per latent size of the quick plan
