@@ -249,10 +249,10 @@ TEST_CASE("CLI: inputs that are not regular files are refused at once, naming th
   const auto big = RunCli({"validate", dir + "/big.json"});
   CHECK(big.exit_code == 2);
   CHECK(big.err == dir + "/big.json: file is 67108865 bytes; the limit is 67108864 (64 MiB)\n");
-  // The top-level value's errors say they are about the document.
+  // The top-level value's errors point at the document itself: "/" (issue 43).
   WriteFile(dir + "/array.json", "[1]");
   CHECK(RunCli({"validate", dir + "/array.json"}).err ==
-        dir + "/array.json: the document: expected an object, got an array of 1\n");
+        dir + "/array.json: /: expected an object, got an array of 1\n");
   // --set errors name the scenario file, then the pointer.
   const auto set = RunCli({"validate", kDefault, "--set", "/nodes/01/id=x"});
   CHECK(set.exit_code == 2);
