@@ -94,6 +94,7 @@ void RemoveRemains(const std::string& dir) {
 }
 
 void PrepareDir(const std::string& dir, const Json& record) {
+  results::RemoveStaleStaging(dir);  // what killed commands left beside it, of any name
   const fs::path file = fs::path(dir) / "reproduce.json";
   std::error_code ec;
   if (fs::is_regular_file(file, ec)) {

@@ -106,6 +106,7 @@ bool PointDone(const std::string& dir, const std::string& id) {
 // Creates DIR (and DIR/points) for `record`, or checks that an existing DIR
 // holds the same sweep.
 void PrepareDir(const std::string& dir, const Json& record) {
+  results::RemoveStaleStaging(dir);  // what killed commands left beside it, of any name
   const fs::path file = fs::path(dir) / "sweep.json";
   std::error_code ec;
   if (fs::exists(file, ec)) {
