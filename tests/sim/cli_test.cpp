@@ -584,3 +584,30 @@ TEST_CASE("CLI: a killed run leaves nothing under its final name", "[sim][slow]"
     CHECK(e.path().filename().string().rfind(killed_prefix, 0) != 0);
   }
 }
+
+TEST_CASE("CLI: a sensor that sees nothing sends empty frames and the run goes on", "[sim]") {
+  // Issue 43: a LiDAR frame without a hit stopped the run (exit 1, "a
+  // sensor produced a frame of no raw data", naming no node).
+  const std::string dir = TempDir("sees-nothing");
+  struct Case {
+    std::vector<std::string> sets;
+    std::uint64_t frames;
+  };
+  const std::vector<Case> cases = {
+      {{"/nodes/1/sensor/pose/rpy_deg/1=-90"}, 4},         // at the sky
+      {{"/nodes/1/sensor/pose/position_m/2=1000000"}, 4},  // far above everything
+      {{"/nodes/1/sensor/rate_hz=2000"}, 800}};            // too fast for a pattern
+  int n = 0;
+  for (const Case& c : cases) {
+    const std::string out = dir + "/run" + std::to_string(n++);
+    std::vector<std::string> args{"run", kDefault, "--duration", "0.4", "--out", out, "--quiet"};
+    for (const std::string& set : c.sets) args.insert(args.end(), {"--set", set});
+    INFO(c.sets.front());
+    const auto r = RunCli(args);
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    const Json metrics = uavsim::core::LoadJsonFile(out + "/metrics.json");
+    CHECK(metrics["modalities"]["lidar"]["frames"].get<std::uint64_t>() >= c.frames);
+    if (n == 2) CHECK(metrics["data_rate_kBps"]["lidar"]["raw"].get<double>() == 0.0);
+  }
+}
