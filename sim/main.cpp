@@ -393,7 +393,7 @@ int Validate(int argc, char** argv) {
   for (const std::string& file : a.positional) {
     try {
       const uavsim::sim::Scenario s = uavsim::sim::LoadScenario(file, Overrides(a));
-      uavsim::sim::CheckTrainedModel(s, file);
+      uavsim::sim::CheckTrainedModel(s, file, a.Has("--quiet"));
       if (a.Has("--resolved")) std::cout << uavsim::sim::ResolvedJson(s).dump(2) << "\n";
       if (!a.Has("--quiet") && !a.Has("--resolved")) {
         const auto e = uavsim::sim::EstimateResources(s);
@@ -462,7 +462,7 @@ int Run(int argc, char** argv) {
     }
   }
   const uavsim::sim::Scenario s = uavsim::sim::LoadScenario(file, overrides);
-  uavsim::sim::CheckTrainedModel(s, file);  // what validate checks, before anything is made
+  uavsim::sim::CheckTrainedModel(s, file, a.Has("--quiet"));  // what validate checks, first
   o.out_dir = a.Value("--out").value_or("runs/" + s.name + "-s" + std::to_string(s.seed));
   const auto summary = uavsim::sim::RunScenario(s, o);
   if (!o.quiet) {

@@ -585,6 +585,38 @@ TEST_CASE("CLI: a killed run leaves nothing under its final name", "[sim][slow]"
   }
 }
 
+TEST_CASE("CLI: validate refuses a model without checksums whose files run would refuse", "[sim]") {
+  // Issue 43: a folder without checksums.sha256 and with a truncated
+  // radar.pt passed validate (exit 0) and run refused it (exit 2).
+  const std::string dir = TempDir("unchecked");
+  fs::copy(std::string(UAVSIM_SOURCE_DIR) + "/models/default", dir + "/m",
+           fs::copy_options::recursive);
+  fs::remove(dir + "/m/checksums.sha256");
+  const std::vector<std::string> validate{"validate", kDefault, "--set",
+                                          "/pipeline/model=" + dir + "/m"};
+  // Whole: accepted, with a warning that nothing vouches for the files.
+  const auto whole = RunCli(validate);
+  INFO(whole.err);
+  CHECK(whole.exit_code == 0);
+  CHECK(whole.err == kDefault + ": /pipeline/model: warning: " + dir +
+                         "/m/model.json: its folder has no checksums.sha256 (a model from "
+                         "before they were kept): checked by loading it\n");
+  const std::uintmax_t size = fs::file_size(dir + "/m/radar.pt");
+  fs::resize_file(dir + "/m/radar.pt", size / 2);
+  std::vector<std::string> run{"run",        kDefault,  "--duration",
+                               "1",          "--quiet", "--out",
+                               dir + "/run", "--set",   "/pipeline/model=" + dir + "/m"};
+  const auto by_run = RunCli(run);
+  const auto by_validate = RunCli(validate);
+  INFO(by_run.err << by_validate.err);
+  CHECK(by_run.exit_code == 2);
+  CHECK(by_validate.exit_code == 2);
+  CHECK(CountLines(by_validate.err) == 1);
+  CHECK_THAT(by_validate.err, Catch::Contains(dir + "/m/radar.pt"));
+  CHECK(by_validate.err == by_run.err);
+  CHECK_FALSE(fs::exists(dir + "/run"));
+}
+
 TEST_CASE("CLI: a sensor that sees nothing sends empty frames and the run goes on", "[sim]") {
   // Issue 43: a LiDAR frame without a hit stopped the run (exit 1, "a
   // sensor produced a frame of no raw data", naming no node).
