@@ -8,6 +8,8 @@
 #include <fstream>
 #include <stdexcept>
 
+#include "sim/core/interrupt.h"
+
 namespace uavsim::results {
 namespace fs = std::filesystem;
 
@@ -119,6 +121,8 @@ void RunDirectory::WriteJson(const std::string& relative_path, const core::Json&
 }
 
 void RunDirectory::Commit() {
+  // A termination request during the last writes: nothing goes in place.
+  core::ThrowIfInterrupted();
   std::error_code ec;
   const fs::path final_path(final_dir_);
   std::string trash;

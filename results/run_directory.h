@@ -56,6 +56,8 @@ class RunDirectory {
   std::string StagingPath(const std::string& relative_path);
 
   // Moves staging to the final name (replacing an old run if `force`).
+  // Throws core::Interrupted, moving nothing, once a termination request
+  // has arrived (sim/core/interrupt.h).
   void Commit();
 
   const std::string& final_dir() const { return final_dir_; }

@@ -1,5 +1,6 @@
 // The uavsim command line (DESIGN.md "Command line"). Errors from bad input
 // are caught here once: one line on stderr, exit code 2.
+#include <signal.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -891,12 +892,36 @@ int Main(int argc, char** argv) {
   throw UsageError("uavsim: unknown command '" + cmd + "' (see uavsim --help)");
 }
 
+// The handlers go in before any shared library's initialisers run
+// (LibTorch's take about half a second, more on a loaded machine): a
+// SIGINT or SIGTERM from a command's first moments gets exit 130 and the
+// documented line, not the default action's 143. Only the dynamic
+// loader's work comes before a program's .preinit_array; the launcher
+// (launcher.cpp) blocks the two signals over it, so they are unblocked
+// here, once the handlers are in: one that came meanwhile is delivered now.
+void InstallHandlersFirst(int, char**, char**) {
+  uavsim::core::InstallInterruptHandlers();
+  sigset_t termination;
+  sigemptyset(&termination);
+  sigaddset(&termination, SIGINT);
+  sigaddset(&termination, SIGTERM);
+  sigprocmask(SIG_UNBLOCK, &termination, nullptr);
+}
+__attribute__((section(".preinit_array"),
+               used)) void (*const kInstallHandlersFirst)(int, char**,
+                                                          char**) = InstallHandlersFirst;
+
 }  // namespace
 
 int main(int argc, char** argv) {
   try {
-    uavsim::core::InstallInterruptHandlers();
-    return Main(argc, argv);
+    uavsim::core::InstallInterruptHandlers();  // again: a library's initialiser may have reset them
+    uavsim::core::ThrowIfInterrupted();        // a request during the libraries' initialisers
+    const int rc = Main(argc, argv);
+    // A request the command did not poll for (it came during its last
+    // steps): answered like any other.
+    uavsim::core::ThrowIfInterrupted();
+    return rc;
   } catch (const uavsim::core::ConfigError& e) {
     std::cerr << e.what() << "\n";
     return kExitBadInput;
