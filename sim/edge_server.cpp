@@ -471,7 +471,13 @@ std::map<std::string, Eigen::Vector3d> EdgeServer::EstimateWindow(std::int64_t t
     }
     for (auto& [method, edge] : scripted_) {
       const auto timing = core::WallProfile::Measure(profile_, "edge/" + method);
-      if (const auto p = edge->OnWindow(inputs)) estimated[method] = *p;
+      std::optional<Eigen::Vector3d> p;
+      try {
+        p = edge->OnWindow(inputs);
+      } catch (const pipeline::ScriptedEdgeFailure& e) {
+        throw pipeline::ScriptedEdgeFailure("method " + method + ": " + e.what(), e.traceback());
+      }
+      if (p) estimated[method] = *p;
     }
     if (uavloc_) {
       const auto timing = core::WallProfile::Measure(profile_, "edge/uavloc");

@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "pipeline/edge/scripted_edge.h"
 #include "results/run_report.h"
 #include "sim/bench_beam.h"
 #include "sim/bench_events.h"
@@ -45,6 +46,9 @@ constexpr int kExitOk = 0;
 constexpr int kExitFailure = 1;
 constexpr int kExitBadInput = 2;
 constexpr int kExitInterrupted = 130;
+
+// --verbose: a failing TorchScript method's whole traceback after its line.
+bool g_verbose = false;
 
 const char* kMainHelp =
     "uavsim: discrete-event network and sensing simulator for edge-assisted multimodal UAV "
@@ -85,7 +89,8 @@ const char* kValidateHelp =
 const char* kRunHelp =
     "usage: uavsim run SCENARIO.json [--out DIR] [--seed N] [--duration S] [--record "
     "camera,lidar,radar]\n"
-    "                               [--set /json/pointer=value]... [--force] [--quiet]\n"
+    "                               [--set /json/pointer=value]... [--force] [--quiet] "
+    "[--verbose]\n"
     "\n"
     "Runs the scenario and writes DIR (default runs/NAME-sSEED): manifest.json, truth.csv,\n"
     "estimates.csv, metrics.json (RMSE per method, packets, data rates), packets.csv,\n"
@@ -103,7 +108,8 @@ const char* kRunHelp =
     "  --record LIST   record raw frames of these modalities under DIR/frames/\n"
     "  --set P=V       override the value at JSON pointer P\n"
     "  --force         replace DIR if it exists\n"
-    "  --quiet         no progress or summary output\n";
+    "  --quiet         no progress or summary output\n"
+    "  --verbose       a failing TorchScript method's whole traceback after its line\n";
 
 const char* kReportHelp =
     "usage: uavsim report DIR [--quiet]\n"
@@ -430,8 +436,9 @@ void PrintTopParts(const uavsim::sim::RunSummary& summary) {
 int Run(int argc, char** argv) {
   const ParsedArgs a =
       Parse("run", argc, argv, 2, {"--out", "--seed", "--duration", "--record", "--set"},
-            {"--quiet", "--force", "--help"});
+            {"--quiet", "--force", "--verbose", "--help"});
   if (a.Has("--help")) return std::cout << kRunHelp, kExitOk;
+  g_verbose = a.Has("--verbose");
   const std::string& file = OneScenario("run", a);
   std::vector<std::string> overrides = Overrides(a);
   if (auto seed = a.Value("--seed")) {
@@ -933,6 +940,10 @@ int main(int argc, char** argv) {
     return kExitInterrupted;
   } catch (const std::bad_alloc&) {
     std::cerr << "uavsim: out of memory\n";
+    return kExitFailure;
+  } catch (const uavsim::pipeline::ScriptedEdgeFailure& e) {
+    std::cerr << "uavsim: " << e.what() << "\n";
+    if (g_verbose) std::cerr << e.traceback() << "\n";
     return kExitFailure;
   } catch (const std::exception& e) {
     std::cerr << "uavsim: " << e.what() << "\n";
