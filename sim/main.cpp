@@ -125,7 +125,7 @@ const char* kReportHelp =
     "exit codes: 0 written, 2 DIR is neither a run directory nor a finished sweep\n";
 
 const char* kSweepHelp =
-    "usage: uavsim sweep SPEC.json [--out DIR] [--jobs N] [--shard I/N] [--quiet]\n"
+    "usage: uavsim sweep SPEC.json [--out DIR] [--jobs N] [--shard I/N] [--wait] [--quiet]\n"
     "       uavsim sweep merge DIR [--quiet]\n"
     "       mpirun -np K uavsim sweep SPEC.json [--out DIR] [--jobs N]\n"
     "\n"
@@ -145,6 +145,8 @@ const char* kSweepHelp =
     "                mpirun, per rank: rank 0 hands points to ranks as they free up\n"
     "  --shard I/N   run only the points whose index is I modulo N (0 <= I < N), e.g. a\n"
     "                Slurm array task; then `uavsim sweep merge DIR` writes the tables\n"
+    "  --wait        when another sweep runs in DIR (its lock DIR/.lock), wait for it\n"
+    "                instead of refusing (exit 2, naming its process)\n"
     "  --quiet       no progress or summary output\n"
     "exit codes: 0 all points done, 1 some points failed (rerun to retry them), 2 bad\n"
     "input, 130 interrupted (finished points are kept)\n";
@@ -219,6 +221,8 @@ const char* kTrainHelp =
     "                 with --episodes N, the first N of FILE, and when FILE holds fewer\n"
     "                 (made with the same scenario and seed) the missing ones are\n"
     "                 simulated and FILE extended: the same set as a fresh simulation\n"
+    "  --wait         when another command uses FILE (its lock .FILE.lock beside it),\n"
+    "                 wait for it instead of refusing (exit 2, naming its process)\n"
     "  --variant V    a baseline or ablation of the paper's Sec. VI (list below): its\n"
     "                 training keys apply before --config; the model (default folder\n"
     "                 models/NAME-V) runs in the loop as method V (paper: uavloc)\n"
@@ -280,7 +284,7 @@ std::string TrainVariantsHelp() {
 
 const char* kReproduceHelp =
     "usage: uavsim reproduce [--scenario S] [--quick] [--jobs N] [--out DIR] [--seeds K]\n"
-    "                        [--episodes N] [--set /ptr=value]... [--quiet]\n"
+    "                        [--episodes N] [--set /ptr=value]... [--wait] [--quiet]\n"
     "       mpirun -np K uavsim reproduce ... (ranks share the episodes and the trainings)\n"
     "\n"
     "Re-runs the evaluation of the paper's Sec. VI on simulated data: simulates four\n"
@@ -304,6 +308,8 @@ const char* kReproduceHelp =
     "  --seeds K      training seeds (default 3; quick 2)\n"
     "  --episodes N   flights per episode set (default 60; quick 6)\n"
     "  --set P=V      override the scenario's value at JSON pointer P\n"
+    "  --wait         when another reproduction runs in DIR (its lock DIR/.lock), wait for\n"
+    "                 it instead of refusing (exit 2, naming its process)\n"
     "\n"
     "exit codes: 0 reported, 1 some trainings failed (rerun to retry them), 2 bad input,\n"
     "130 interrupted (finished trainings are kept)\n";
@@ -553,8 +559,8 @@ int Train(int argc, char** argv) {
   // refused by name when last, where Parse would ask for their value).
   for (const auto& [flag, keys] : ReplacedTrainFlags()) value_options.insert(flag);
   if (argc > 2) refuse_replaced(argv[argc - 1]);
-  const ParsedArgs a =
-      Parse("train", argc, argv, 2, value_options, {"--quick", "--quiet", "--force", "--help"});
+  const ParsedArgs a = Parse("train", argc, argv, 2, value_options,
+                             {"--quick", "--quiet", "--force", "--wait", "--help"});
   if (a.Has("--help")) return std::cout << kTrainHelp << TrainVariantsHelp(), kExitOk;
   for (const auto& [flag, keys] : ReplacedTrainFlags())
     if (a.Has(flag)) refuse_replaced(flag);
@@ -565,6 +571,7 @@ int Train(int argc, char** argv) {
   c.quiet = a.Has("--quiet");
   c.force = a.Has("--force");
   c.data_file = a.Value("--data").value_or("");
+  c.wait = a.Has("--wait");
   if (auto v = a.Value("--seed")) c.seed = UnsignedOption("train", "--seed", *v, ~0ull >> 1);
   if (auto v = a.Value("--data-seed"))
     c.data_seed = UnsignedOption("train", "--data-seed", *v, ~0ull >> 1);
@@ -727,8 +734,8 @@ void PrintSweepOutcome(const std::string& dir, const uavsim::sim::SweepOutcome& 
 }
 
 int Sweep(int argc, char** argv) {
-  const ParsedArgs a =
-      Parse("sweep", argc, argv, 2, {"--out", "--jobs", "--shard"}, {"--quiet", "--help"});
+  const ParsedArgs a = Parse("sweep", argc, argv, 2, {"--out", "--jobs", "--shard"},
+                             {"--quiet", "--wait", "--help"});
   if (a.Has("--help")) return std::cout << kSweepHelp, kExitOk;
   const bool quiet = a.Has("--quiet");
   if (!a.positional.empty() && a.positional[0] == "merge") {
@@ -743,6 +750,7 @@ int Sweep(int argc, char** argv) {
     throw UsageError("uavsim sweep: expected one sweep spec file (see uavsim sweep --help)");
   uavsim::sim::SweepOptions o;
   o.quiet = quiet;
+  o.wait = a.Has("--wait");
   if (auto v = a.Value("--jobs"))
     o.jobs = static_cast<int>(UnsignedOption("sweep", "--jobs", *v, 1024));
   if (o.jobs < 1) throw UsageError("uavsim sweep: --jobs needs at least 1");
@@ -775,12 +783,13 @@ int Sweep(int argc, char** argv) {
 int Reproduce(int argc, char** argv) {
   const ParsedArgs a = Parse("reproduce", argc, argv, 2,
                              {"--scenario", "--out", "--jobs", "--seeds", "--episodes", "--set"},
-                             {"--quick", "--quiet", "--help"});
+                             {"--quick", "--quiet", "--wait", "--help"});
   if (a.Has("--help")) return std::cout << kReproduceHelp, kExitOk;
   if (!a.positional.empty())
     throw UsageError("uavsim reproduce: unexpected argument '" + a.positional[0] +
                      "' (the scenario goes after --scenario; see uavsim reproduce --help)");
   uavsim::sim::ReproduceOptions o;
+  o.wait = a.Has("--wait");
   o.quick = a.Has("--quick");
   o.quiet = a.Has("--quiet");
   const std::string scenario = a.Value("--scenario").value_or("city");

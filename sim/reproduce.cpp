@@ -20,6 +20,7 @@
 #include "results/run_directory.h"
 #include "sim/core/atomic_file.h"
 #include "sim/core/error.h"
+#include "sim/core/file_lock.h"
 #include "sim/core/interrupt.h"
 #include "sim/core/json_io.h"
 #include "sim/process_farm.h"
@@ -293,7 +294,9 @@ ReproduceOutcome RunReproduce(const Scenario& base, const ReproduceOptions& o) {
   }
   const bool coordinator = !world || world->rank() == 0;
 
-  // 1. The episode sets, each simulated once (every rank its share).
+  // 1. The episode sets, each simulated once (every rank its share). Rank 0
+  // locks DIR as it first prepares it, to the end.
+  std::optional<core::FileLock> lock;
   std::map<std::string, std::vector<pipeline::Episode>> sets;
   for (const std::string& set : SetsOf(plan)) {
     Scenario s = base;
@@ -310,8 +313,13 @@ ReproduceOutcome RunReproduce(const Scenario& base, const ReproduceOptions& o) {
     if (coordinator && !o.quiet)
       std::cerr << "uavsim reproduce: episode set " << set << " (" << p.episodes << " of "
                 << p.episode_s << " s)\n";
+    request.wait = o.wait;
     std::optional<std::vector<pipeline::Episode>> e = GatherEpisodes(
-        s, p, request, [&] { PrepareDir(dir, PlanRecord(base, plan, o.quick)); },
+        s, p, request,
+        [&] {
+          PrepareDir(dir, PlanRecord(base, plan, o.quick));
+          if (!lock) lock.emplace(dir + "/.lock", "uavsim reproduce: " + dir, o.wait);
+        },
         [&] {
           std::error_code ec;
           fs::remove_all(scratch, ec);
