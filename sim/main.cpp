@@ -32,6 +32,7 @@
 #include "sim/edge_server.h"
 #include "sim/reproduce.h"
 #include "sim/run.h"
+#include "sim/run_cost.h"
 #include "sim/scenario.h"
 #include "sim/sweep.h"
 #include "sim/sweep_spec.h"
@@ -72,7 +73,7 @@ const char* kMainHelp =
 
 const char* kValidateHelp =
     "usage: uavsim validate SCENARIO.json [MORE.json]... [--set /json/pointer=value]...\n"
-    "                       [--resolved] [--quiet]\n"
+    "                       [--record camera,lidar,radar] [--resolved] [--quiet]\n"
     "\n"
     "Checks each SCENARIO.json strictly (unknown keys, types, ranges, references, files,\n"
     "meshes, the trained model's manifest and checksums, resource limits: rays and\n"
@@ -84,6 +85,7 @@ const char* kValidateHelp =
     "                in every file\n"
     "  --resolved    print the scenario with every default filled, as JSON, on stdout\n"
     "                (one file only)\n"
+    "  --record LIST also say how many bytes `run --record LIST` would write at most\n"
     "  --quiet       print nothing on success\n";
 
 const char* kRunHelp =
@@ -392,14 +394,58 @@ const std::string& OneScenario(const std::string& cmd, const ParsedArgs& a) {
   return a.positional[0];
 }
 
+// --record LIST: camera, lidar and radar, comma-separated (none: empty).
+std::vector<std::string> RecordList(const std::string& cmd, const ParsedArgs& a) {
+  std::vector<std::string> record;
+  if (auto r = a.Value("--record")) {
+    std::stringstream ss(*r);
+    std::string m;
+    while (std::getline(ss, m, ',')) {
+      if (m != "camera" && m != "lidar" && m != "radar")
+        throw UsageError("uavsim " + cmd +
+                         ": --record expects a list of camera, lidar, radar; got '" + m + "'");
+      record.push_back(m);
+    }
+  }
+  return record;
+}
+
+// "12 s", "3.4 min", "2.1 h".
+std::string Duration(double s) {
+  char text[32];
+  if (s < 120)
+    std::snprintf(text, sizeof text, "%.2g s", s);
+  else if (s < 7200)
+    std::snprintf(text, sizeof text, "%.2g min", s / 60);
+  else
+    std::snprintf(text, sizeof text, "%.3g h", s / 3600);
+  return text;
+}
+
+// A recording that would not fit the output's file system is refused
+// before anything is made.
+void RequireRoomToRecord(const uavsim::sim::Scenario& s, const uavsim::sim::RunOptions& o) {
+  if (o.record.empty()) return;
+  const double bytes = uavsim::sim::EstimateRecordBytes(s, o.record);
+  const double free = uavsim::sim::FreeBytesFor(o.out_dir);
+  if (free < 0 || bytes <= free) return;
+  char text[256];
+  std::snprintf(text, sizeof text,
+                "uavsim run: --record would write up to %.3g bytes; the file system of %s has "
+                "%.3g free",
+                bytes, o.out_dir.c_str(), free);
+  throw UsageError(text);
+}
+
 int Validate(int argc, char** argv) {
   const ParsedArgs a =
-      Parse("validate", argc, argv, 2, {"--set"}, {"--quiet", "--resolved", "--help"});
+      Parse("validate", argc, argv, 2, {"--set", "--record"}, {"--quiet", "--resolved", "--help"});
   if (a.Has("--help")) return std::cout << kValidateHelp, kExitOk;
   if (a.positional.empty())
     throw UsageError("uavsim validate: expected a scenario file (see uavsim validate --help)");
   if (a.Has("--resolved") && a.positional.size() != 1)
     throw UsageError("uavsim validate: --resolved prints one scenario: give one file");
+  const std::vector<std::string> record = RecordList("validate", a);
   // Each file on its own: a bad one gets its line on stderr and the rest are
   // still checked; the exit code is 2 if any was bad.
   int exit_code = kExitOk;
@@ -411,9 +457,15 @@ int Validate(int argc, char** argv) {
       if (!a.Has("--quiet") && !a.Has("--resolved")) {
         const auto e = uavsim::sim::EstimateResources(s);
         std::printf(
-            "%s: ok (%zu UAV%s, %zu node%s, %g s simulated, %.3g rays per simulated second)\n",
+            "%s: ok (%zu UAV%s, %zu node%s, %g s simulated, %.3g rays per simulated second; "
+            "about %s of wall time here",
             file.c_str(), s.uavs.size(), s.uavs.size() == 1 ? "" : "s", s.nodes.size(),
-            s.nodes.size() == 1 ? "" : "s", s.duration_s, e.rays_per_s);
+            s.nodes.size() == 1 ? "" : "s", s.duration_s, e.rays_per_s,
+            Duration(uavsim::sim::EstimateWallSeconds(s)).c_str());
+        if (!record.empty())
+          std::printf("; --record writes at most %.3g bytes",
+                      uavsim::sim::EstimateRecordBytes(s, record));
+        std::printf(")\n");
         std::fflush(stdout);
       }
     } catch (const uavsim::core::ConfigError& e) {
@@ -465,19 +517,11 @@ int Run(int argc, char** argv) {
   o.quiet = a.Has("--quiet");
   o.force = a.Has("--force");
   o.scenario_file = file;
-  if (auto r = a.Value("--record")) {
-    std::stringstream ss(*r);
-    std::string m;
-    while (std::getline(ss, m, ',')) {
-      if (m != "camera" && m != "lidar" && m != "radar")
-        throw UsageError("uavsim run: --record expects a list of camera, lidar, radar; got '" + m +
-                         "'");
-      o.record.push_back(m);
-    }
-  }
+  o.record = RecordList("run", a);
   const uavsim::sim::Scenario s = uavsim::sim::LoadScenario(file, overrides);
   uavsim::sim::CheckTrainedModel(s, file, a.Has("--quiet"));  // what validate checks, first
   o.out_dir = a.Value("--out").value_or("runs/" + s.name + "-s" + std::to_string(s.seed));
+  RequireRoomToRecord(s, o);
   const auto summary = uavsim::sim::RunScenario(s, o);
   if (!o.quiet) {
     std::printf("%s: %g s simulated in %.3f s (%.3gx real time); truth.csv %zu rows; frames",

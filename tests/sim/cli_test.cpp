@@ -643,3 +643,28 @@ TEST_CASE("CLI: a sensor that sees nothing sends empty frames and the run goes o
     if (n == 2) CHECK(metrics["data_rate_kBps"]["lidar"]["raw"].get<double>() == 0.0);
   }
 }
+
+TEST_CASE("CLI: validate says what a run will cost; run refuses a recording the disk cannot hold",
+          "[sim]") {
+  // Issue 43: duration_s up to 86 400 was accepted with no estimate, and a
+  // recording ran until the disk was full. A LiDAR of 2e7 points a second
+  // for a day records 20 bytes a point: 3.5e13 bytes, beyond any disk here.
+  const std::string dir = TempDir("cost");
+  WriteFile(dir + "/day.json", R"({"duration_s": 86400, "nodes": [{"id": "l", "sensor":
+      {"type": "lidar", "preset": "livox_rosette", "points_per_s": 2e7}, "uplink": "default"}]})");
+  const auto v = RunCli({"validate", dir + "/day.json", "--record", "lidar"});
+  INFO(v.err);
+  CHECK(v.exit_code == 0);
+  CHECK_THAT(v.out, Catch::Contains(" of wall time here; --record writes at most 3.46e+13 bytes)"));
+  const auto plain = RunCli({"validate", dir + "/day.json"});
+  CHECK_THAT(plain.out, Catch::Contains(" of wall time here)\n"));
+  CHECK_THAT(plain.out, Catch::Contains("about "));
+  const auto r = RunCli({"run", dir + "/day.json", "--record", "lidar", "--out", dir + "/run"});
+  INFO(r.err);
+  CHECK(r.exit_code == 2);
+  CHECK(CountLines(r.err) == 1);
+  CHECK_THAT(r.err, Catch::StartsWith("uavsim run: --record would write up to 3.46e+13 bytes; the "
+                                      "file system of " +
+                                      dir + "/run has "));
+  CHECK_FALSE(fs::exists(dir + "/run"));
+}
