@@ -3,7 +3,8 @@
 // sweeps with one --out, two trainings extending one episode file). The
 // holder writes its process id and command line into the file; a command
 // that finds the lock taken names them. The lock goes with the process
-// (a killed holder releases it); the file stays, empty of meaning.
+// (a killed holder releases it); the holder removes the file as it lets
+// go (a killed one leaves it, unlocked, for the next holder to remove).
 #pragma once
 
 #include <string>
@@ -24,6 +25,8 @@ class FileLock {
   FileLock& operator=(const FileLock&) = delete;
 
  private:
+  bool TakeOnce(const std::string& what, bool wait);
+  std::string path_;
   int fd_ = -1;
 };
 

@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <catch2/catch.hpp>
+#include <filesystem>
 #include <optional>
 #include <string>
 
@@ -34,6 +35,11 @@ TEST_CASE("FileLock: a second holder is refused naming the first, or waits", "[c
   uavsim::core::RequestInterrupt();
   CHECK_THROWS_AS(FileLock(path, "uavsim sweep: out", true), uavsim::core::Interrupted);
   uavsim::core::ClearInterrupt();
-  first.reset();  // released: the next one takes it
-  CHECK_NOTHROW(FileLock(path, "uavsim sweep: out", false));
+  first.reset();  // released, and its file removed: the next one takes a new one
+  CHECK_FALSE(std::filesystem::exists(path));
+  {
+    const FileLock next(path, "uavsim sweep: out", false);
+    CHECK(std::filesystem::exists(path));
+  }
+  CHECK_FALSE(std::filesystem::exists(path));
 }
