@@ -628,12 +628,14 @@ TEST_CASE("Sweep: SIGINT or SIGTERM stops a sweep with exit 130, keeping finishe
       "seeds": [1, 2])"));
   const std::string out = root + "/big-out";
   Background sweep({"sweep", big, "--out", out, "--quiet"}, root + "/big-log");
-  // Once uavsim (not the test's fork before exec) handles SIGTERM (/proc's
-  // SigCgt mask), it is reading the spec and then checking its 40 000 points.
+  // Once uavsim (not the test's fork before exec; the program proper the
+  // launcher runs, uavsim-main) handles SIGTERM (/proc's SigCgt mask), it
+  // is reading the spec and then checking its 40 000 points.
   const auto handles_sigterm = [pid = sweep.pid()] {
     const std::string proc = "/proc/" + std::to_string(pid);
     std::error_code ec;
-    if (fs::read_symlink(proc + "/exe", ec) != fs::canonical(UAVSIM_CLI)) return false;
+    const std::string main = fs::canonical(UAVSIM_CLI).string() + "-main";
+    if (fs::read_symlink(proc + "/exe", ec).string() != main) return false;
     std::istringstream status(ReadFile(proc + "/status"));
     std::string line;
     while (std::getline(status, line))
