@@ -8,6 +8,8 @@
 #include <fstream>
 #include <stdexcept>
 
+#include "sim/core/interrupt.h"
+
 namespace uavsim::results {
 namespace fs = std::filesystem;
 
@@ -41,13 +43,13 @@ std::size_t RemoveStaleStaging(const std::string& final_dir) {
   const fs::path final_path(final_dir);
   fs::path parent = final_path.parent_path();
   if (parent.empty()) parent = ".";
-  const std::string name = final_path.filename().string();
   std::size_t removed = 0;
   std::error_code ec;
+  // Any name's: a run killed as `--out k` leaves `.k.partial-PID`, which a
+  // later command of another name in the same folder clears (issue 43).
   for (const auto& e : fs::directory_iterator(parent, ec)) {
-    std::string owner_of;
-    const auto pid = StagingOwner(e.path().filename().string(), &owner_of);
-    if (!pid || owner_of != name || *pid == ::getpid() || ProcessAlive(*pid)) continue;
+    const auto pid = StagingOwner(e.path().filename().string(), nullptr);
+    if (!pid || *pid == ::getpid() || ProcessAlive(*pid)) continue;
     std::error_code rm;
     if (fs::remove_all(e.path(), rm) > 0 && !rm) ++removed;
   }
@@ -119,6 +121,8 @@ void RunDirectory::WriteJson(const std::string& relative_path, const core::Json&
 }
 
 void RunDirectory::Commit() {
+  // A termination request during the last writes: nothing goes in place.
+  core::ThrowIfInterrupted();
   std::error_code ec;
   const fs::path final_path(final_dir_);
   std::string trash;

@@ -3,7 +3,8 @@
 // and renamed; Commit() renames the staging directory to its final name.
 // A run that throws or is killed never leaves its final directory behind
 // half-written (a killed run leaves only the hidden ".NAME.partial-PID",
-// which the next RunDirectory for NAME removes once process PID is gone).
+// which the next RunDirectory in the same folder removes once process PID
+// is gone).
 #pragma once
 
 #include <sys/types.h>
@@ -27,8 +28,8 @@ bool ProcessAlive(pid_t pid);
 // old run), and NAME in *final_name; nothing for other names.
 std::optional<pid_t> StagingOwner(const std::string& folder_name, std::string* final_name);
 
-// Removes the staging folders ".NAME.partial-PID" beside `final_dir` (NAME
-// its last component) whose process is gone: what a run or a training
+// Removes the staging folders ".NAME.partial-PID" beside `final_dir`, of
+// any NAME, whose process is gone: what a run, a training or a sweep point
 // killed with SIGKILL left. Returns how many.
 std::size_t RemoveStaleStaging(const std::string& final_dir);
 
@@ -40,7 +41,7 @@ std::size_t RemoveStaleTemporaries(const std::string& folder);
 class RunDirectory {
  public:
   // Throws core::UsageError if `final_dir` exists and `force` is false.
-  // Removes stale staging folders of the same name first
+  // Removes the stale staging folders beside it first, of any name
   // (RemoveStaleStaging).
   RunDirectory(std::string final_dir, bool force);
   ~RunDirectory();  // removes the staging directory unless committed
@@ -55,6 +56,8 @@ class RunDirectory {
   std::string StagingPath(const std::string& relative_path);
 
   // Moves staging to the final name (replacing an old run if `force`).
+  // Throws core::Interrupted, moving nothing, once a termination request
+  // has arrived (sim/core/interrupt.h).
   void Commit();
 
   const std::string& final_dir() const { return final_dir_; }

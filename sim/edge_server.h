@@ -64,13 +64,16 @@ namespace uavsim::sim {
 // single-modality ablations, uavloc_anchored).
 bool NeedsTrainedModel(const Scenario& s);
 
-// What `validate` checks of that model without loading any weights: the
-// manifest exists and parses, the folder's checksums hold, it has the edge
-// head each method needs, and its latent size and window length are the
-// scenario's (the rules the run applies when
-// it loads the model). Nothing when no method needs one. Throws
-// core::ConfigError naming `file` and the scenario's pointer.
-void CheckTrainedModel(const Scenario& s, const std::string& file);
+// What `validate` checks of that model: the manifest exists and parses,
+// the folder's checksums hold, it has the edge head each method needs, and
+// its latent size and window length are the scenario's (the rules the run
+// applies when it loads the model); the TorchScript methods load. No
+// weights are loaded when the folders (the model's and its variants') have
+// checksums.sha256; a folder without one is loaded as the run loads it,
+// with a warning on stderr unless `quiet`. Nothing when no method needs a
+// model. Throws core::ConfigError naming `file` and the scenario's pointer
+// (or the model's file that does not load).
+void CheckTrainedModel(const Scenario& s, const std::string& file, bool quiet = false);
 
 // A model folder (or its manifest; "default": the shipped model) whose node
 // encoders a command runs on the scenario's observations outside the loop

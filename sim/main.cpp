@@ -1,5 +1,6 @@
 // The uavsim command line (DESIGN.md "Command line"). Errors from bad input
 // are caught here once: one line on stderr, exit code 2.
+#include <signal.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -16,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "pipeline/edge/scripted_edge.h"
 #include "results/run_report.h"
 #include "sim/bench_beam.h"
 #include "sim/bench_events.h"
@@ -31,6 +33,7 @@
 #include "sim/reproduce.h"
 #include "sim/reproduce_report.h"
 #include "sim/run.h"
+#include "sim/run_cost.h"
 #include "sim/scenario.h"
 #include "sim/sweep.h"
 #include "sim/sweep_spec.h"
@@ -45,6 +48,9 @@ constexpr int kExitOk = 0;
 constexpr int kExitFailure = 1;
 constexpr int kExitBadInput = 2;
 constexpr int kExitInterrupted = 130;
+
+// --verbose: a failing TorchScript method's whole traceback after its line.
+bool g_verbose = false;
 
 const char* kMainHelp =
     "uavsim: discrete-event network and sensing simulator for edge-assisted multimodal UAV "
@@ -68,7 +74,7 @@ const char* kMainHelp =
 
 const char* kValidateHelp =
     "usage: uavsim validate SCENARIO.json [MORE.json]... [--set /json/pointer=value]...\n"
-    "                       [--resolved] [--quiet]\n"
+    "                       [--record camera,lidar,radar] [--resolved] [--quiet]\n"
     "\n"
     "Checks each SCENARIO.json strictly (unknown keys, types, ranges, references, files,\n"
     "meshes, the trained model's manifest and checksums, resource limits: rays and\n"
@@ -80,12 +86,14 @@ const char* kValidateHelp =
     "                in every file\n"
     "  --resolved    print the scenario with every default filled, as JSON, on stdout\n"
     "                (one file only)\n"
+    "  --record LIST also say how many bytes `run --record LIST` would write at most\n"
     "  --quiet       print nothing on success\n";
 
 const char* kRunHelp =
     "usage: uavsim run SCENARIO.json [--out DIR] [--seed N] [--duration S] [--record "
     "camera,lidar,radar]\n"
-    "                               [--set /json/pointer=value]... [--force] [--quiet]\n"
+    "                               [--set /json/pointer=value]... [--force] [--quiet] "
+    "[--verbose]\n"
     "\n"
     "Runs the scenario and writes DIR (default runs/NAME-sSEED): manifest.json, truth.csv,\n"
     "estimates.csv, metrics.json (RMSE per method, packets, data rates), packets.csv,\n"
@@ -103,7 +111,8 @@ const char* kRunHelp =
     "  --record LIST   record raw frames of these modalities under DIR/frames/\n"
     "  --set P=V       override the value at JSON pointer P\n"
     "  --force         replace DIR if it exists\n"
-    "  --quiet         no progress or summary output\n";
+    "  --quiet         no progress or summary output\n"
+    "  --verbose       a failing TorchScript method's whole traceback after its line\n";
 
 const char* kReportHelp =
     "usage: uavsim report DIR [--quiet]\n"
@@ -123,7 +132,7 @@ const char* kReportHelp =
     "reproduction, or one of its files is malformed\n";
 
 const char* kSweepHelp =
-    "usage: uavsim sweep SPEC.json [--out DIR] [--jobs N] [--shard I/N] [--quiet]\n"
+    "usage: uavsim sweep SPEC.json [--out DIR] [--jobs N] [--shard I/N] [--wait] [--quiet]\n"
     "       uavsim sweep merge DIR [--quiet]\n"
     "       mpirun -np K uavsim sweep SPEC.json [--out DIR] [--jobs N]\n"
     "\n"
@@ -143,6 +152,8 @@ const char* kSweepHelp =
     "                mpirun, per rank: rank 0 hands points to ranks as they free up\n"
     "  --shard I/N   run only the points whose index is I modulo N (0 <= I < N), e.g. a\n"
     "                Slurm array task; then `uavsim sweep merge DIR` writes the tables\n"
+    "  --wait        when another sweep runs in DIR (its lock DIR/.lock), wait for it\n"
+    "                instead of refusing (exit 2, naming its process)\n"
     "  --quiet       no progress or summary output\n"
     "exit codes: 0 all points done, 1 some points failed (rerun to retry them), 2 bad\n"
     "input, 130 interrupted (finished points are kept)\n";
@@ -219,6 +230,8 @@ const char* kTrainHelp =
     "                 with --episodes N, the first N of FILE, and when FILE holds fewer\n"
     "                 (made with the same scenario and seed) the missing ones are\n"
     "                 simulated and FILE extended: the same set as a fresh simulation\n"
+    "  --wait         when another command uses FILE (its lock .FILE.lock beside it),\n"
+    "                 wait for it instead of refusing (exit 2, naming its process)\n"
     "  --variant V    a baseline or ablation of the paper's Sec. VI (list below): its\n"
     "                 training keys apply before --config; the model (default folder\n"
     "                 models/NAME-V) runs in the loop as method V (paper: uavloc)\n"
@@ -280,7 +293,7 @@ std::string TrainVariantsHelp() {
 
 const char* kReproduceHelp =
     "usage: uavsim reproduce [--scenario S] [--quick] [--jobs N] [--out DIR] [--seeds K]\n"
-    "                        [--episodes N] [--set /ptr=value]... [--quiet]\n"
+    "                        [--episodes N] [--set /ptr=value]... [--wait] [--quiet]\n"
     "       mpirun -np K uavsim reproduce ... (ranks share the episodes and the trainings)\n"
     "\n"
     "Re-runs the evaluation of the paper's Sec. VI on simulated data: simulates four\n"
@@ -308,6 +321,8 @@ const char* kReproduceHelp =
     "                 seeds it lacks are trained\n"
     "  --episodes N   flights per episode set (default 60; quick 6)\n"
     "  --set P=V      override the scenario's value at JSON pointer P\n"
+    "  --wait         when another reproduction runs in DIR (its lock DIR/.lock), wait for\n"
+    "                 it instead of refusing (exit 2, naming its process)\n"
     "\n"
     "exit codes: 0 reported, 1 some trainings failed (rerun to retry them), 2 bad input,\n"
     "130 interrupted (finished trainings are kept)\n";
@@ -390,28 +405,78 @@ const std::string& OneScenario(const std::string& cmd, const ParsedArgs& a) {
   return a.positional[0];
 }
 
+// --record LIST: camera, lidar and radar, comma-separated (none: empty).
+std::vector<std::string> RecordList(const std::string& cmd, const ParsedArgs& a) {
+  std::vector<std::string> record;
+  if (auto r = a.Value("--record")) {
+    std::stringstream ss(*r);
+    std::string m;
+    while (std::getline(ss, m, ',')) {
+      if (m != "camera" && m != "lidar" && m != "radar")
+        throw UsageError("uavsim " + cmd +
+                         ": --record expects a list of camera, lidar, radar; got '" + m + "'");
+      record.push_back(m);
+    }
+  }
+  return record;
+}
+
+// "12 s", "3.4 min", "2.1 h".
+std::string Duration(double s) {
+  char text[32];
+  if (s < 120)
+    std::snprintf(text, sizeof text, "%.2g s", s);
+  else if (s < 7200)
+    std::snprintf(text, sizeof text, "%.2g min", s / 60);
+  else
+    std::snprintf(text, sizeof text, "%.3g h", s / 3600);
+  return text;
+}
+
+// A recording that would not fit the output's file system is refused
+// before anything is made.
+void RequireRoomToRecord(const uavsim::sim::Scenario& s, const uavsim::sim::RunOptions& o) {
+  if (o.record.empty()) return;
+  const double bytes = uavsim::sim::EstimateRecordBytes(s, o.record);
+  const double free = uavsim::sim::FreeBytesFor(o.out_dir);
+  if (free < 0 || bytes <= free) return;
+  char text[256];
+  std::snprintf(text, sizeof text,
+                "uavsim run: --record would write up to %.3g bytes; the file system of %s has "
+                "%.3g free",
+                bytes, o.out_dir.c_str(), free);
+  throw UsageError(text);
+}
+
 int Validate(int argc, char** argv) {
   const ParsedArgs a =
-      Parse("validate", argc, argv, 2, {"--set"}, {"--quiet", "--resolved", "--help"});
+      Parse("validate", argc, argv, 2, {"--set", "--record"}, {"--quiet", "--resolved", "--help"});
   if (a.Has("--help")) return std::cout << kValidateHelp, kExitOk;
   if (a.positional.empty())
     throw UsageError("uavsim validate: expected a scenario file (see uavsim validate --help)");
   if (a.Has("--resolved") && a.positional.size() != 1)
     throw UsageError("uavsim validate: --resolved prints one scenario: give one file");
+  const std::vector<std::string> record = RecordList("validate", a);
   // Each file on its own: a bad one gets its line on stderr and the rest are
   // still checked; the exit code is 2 if any was bad.
   int exit_code = kExitOk;
   for (const std::string& file : a.positional) {
     try {
       const uavsim::sim::Scenario s = uavsim::sim::LoadScenario(file, Overrides(a));
-      uavsim::sim::CheckTrainedModel(s, file);
+      uavsim::sim::CheckTrainedModel(s, file, a.Has("--quiet"));
       if (a.Has("--resolved")) std::cout << uavsim::sim::ResolvedJson(s).dump(2) << "\n";
       if (!a.Has("--quiet") && !a.Has("--resolved")) {
         const auto e = uavsim::sim::EstimateResources(s);
         std::printf(
-            "%s: ok (%zu UAV%s, %zu node%s, %g s simulated, %.3g rays per simulated second)\n",
+            "%s: ok (%zu UAV%s, %zu node%s, %g s simulated, %.3g rays per simulated second; "
+            "about %s of wall time here",
             file.c_str(), s.uavs.size(), s.uavs.size() == 1 ? "" : "s", s.nodes.size(),
-            s.nodes.size() == 1 ? "" : "s", s.duration_s, e.rays_per_s);
+            s.nodes.size() == 1 ? "" : "s", s.duration_s, e.rays_per_s,
+            Duration(uavsim::sim::EstimateWallSeconds(s)).c_str());
+        if (!record.empty())
+          std::printf("; --record writes at most %.3g bytes",
+                      uavsim::sim::EstimateRecordBytes(s, record));
+        std::printf(")\n");
         std::fflush(stdout);
       }
     } catch (const uavsim::core::ConfigError& e) {
@@ -440,8 +505,9 @@ void PrintTopParts(const uavsim::sim::RunSummary& summary) {
 int Run(int argc, char** argv) {
   const ParsedArgs a =
       Parse("run", argc, argv, 2, {"--out", "--seed", "--duration", "--record", "--set"},
-            {"--quiet", "--force", "--help"});
+            {"--quiet", "--force", "--verbose", "--help"});
   if (a.Has("--help")) return std::cout << kRunHelp, kExitOk;
+  g_verbose = a.Has("--verbose");
   const std::string& file = OneScenario("run", a);
   std::vector<std::string> overrides = Overrides(a);
   if (auto seed = a.Value("--seed")) {
@@ -462,19 +528,11 @@ int Run(int argc, char** argv) {
   o.quiet = a.Has("--quiet");
   o.force = a.Has("--force");
   o.scenario_file = file;
-  if (auto r = a.Value("--record")) {
-    std::stringstream ss(*r);
-    std::string m;
-    while (std::getline(ss, m, ',')) {
-      if (m != "camera" && m != "lidar" && m != "radar")
-        throw UsageError("uavsim run: --record expects a list of camera, lidar, radar; got '" + m +
-                         "'");
-      o.record.push_back(m);
-    }
-  }
+  o.record = RecordList("run", a);
   const uavsim::sim::Scenario s = uavsim::sim::LoadScenario(file, overrides);
-  uavsim::sim::CheckTrainedModel(s, file);  // what validate checks, before anything is made
+  uavsim::sim::CheckTrainedModel(s, file, a.Has("--quiet"));  // what validate checks, first
   o.out_dir = a.Value("--out").value_or("runs/" + s.name + "-s" + std::to_string(s.seed));
+  RequireRoomToRecord(s, o);
   const auto summary = uavsim::sim::RunScenario(s, o);
   if (!o.quiet) {
     std::printf("%s: %g s simulated in %.3f s (%.3gx real time); truth.csv %zu rows; frames",
@@ -556,8 +614,8 @@ int Train(int argc, char** argv) {
   // refused by name when last, where Parse would ask for their value).
   for (const auto& [flag, keys] : ReplacedTrainFlags()) value_options.insert(flag);
   if (argc > 2) refuse_replaced(argv[argc - 1]);
-  const ParsedArgs a =
-      Parse("train", argc, argv, 2, value_options, {"--quick", "--quiet", "--force", "--help"});
+  const ParsedArgs a = Parse("train", argc, argv, 2, value_options,
+                             {"--quick", "--quiet", "--force", "--wait", "--help"});
   if (a.Has("--help")) return std::cout << kTrainHelp << TrainVariantsHelp(), kExitOk;
   for (const auto& [flag, keys] : ReplacedTrainFlags())
     if (a.Has(flag)) refuse_replaced(flag);
@@ -568,6 +626,7 @@ int Train(int argc, char** argv) {
   c.quiet = a.Has("--quiet");
   c.force = a.Has("--force");
   c.data_file = a.Value("--data").value_or("");
+  c.wait = a.Has("--wait");
   if (auto v = a.Value("--seed")) c.seed = UnsignedOption("train", "--seed", *v, ~0ull >> 1);
   if (auto v = a.Value("--data-seed"))
     c.data_seed = UnsignedOption("train", "--data-seed", *v, ~0ull >> 1);
@@ -744,8 +803,8 @@ void PrintSweepOutcome(const std::string& dir, const uavsim::sim::SweepOutcome& 
 }
 
 int Sweep(int argc, char** argv) {
-  const ParsedArgs a =
-      Parse("sweep", argc, argv, 2, {"--out", "--jobs", "--shard"}, {"--quiet", "--help"});
+  const ParsedArgs a = Parse("sweep", argc, argv, 2, {"--out", "--jobs", "--shard"},
+                             {"--quiet", "--wait", "--help"});
   if (a.Has("--help")) return std::cout << kSweepHelp, kExitOk;
   const bool quiet = a.Has("--quiet");
   if (!a.positional.empty() && a.positional[0] == "merge") {
@@ -760,6 +819,7 @@ int Sweep(int argc, char** argv) {
     throw UsageError("uavsim sweep: expected one sweep spec file (see uavsim sweep --help)");
   uavsim::sim::SweepOptions o;
   o.quiet = quiet;
+  o.wait = a.Has("--wait");
   if (auto v = a.Value("--jobs"))
     o.jobs = static_cast<int>(UnsignedOption("sweep", "--jobs", *v, 1024));
   if (o.jobs < 1) throw UsageError("uavsim sweep: --jobs needs at least 1");
@@ -792,12 +852,13 @@ int Sweep(int argc, char** argv) {
 int Reproduce(int argc, char** argv) {
   const ParsedArgs a = Parse("reproduce", argc, argv, 2,
                              {"--scenario", "--out", "--jobs", "--seeds", "--episodes", "--set"},
-                             {"--quick", "--quiet", "--help"});
+                             {"--quick", "--quiet", "--wait", "--help"});
   if (a.Has("--help")) return std::cout << kReproduceHelp, kExitOk;
   if (!a.positional.empty())
     throw UsageError("uavsim reproduce: unexpected argument '" + a.positional[0] +
                      "' (the scenario goes after --scenario; see uavsim reproduce --help)");
   uavsim::sim::ReproduceOptions o;
+  o.wait = a.Has("--wait");
   o.quick = a.Has("--quick");
   o.quiet = a.Has("--quiet");
   const std::string scenario = a.Value("--scenario").value_or("city");
@@ -920,12 +981,36 @@ int Main(int argc, char** argv) {
   throw UsageError("uavsim: unknown command '" + cmd + "' (see uavsim --help)");
 }
 
+// The handlers go in before any shared library's initialisers run
+// (LibTorch's take about half a second, more on a loaded machine): a
+// SIGINT or SIGTERM from a command's first moments gets exit 130 and the
+// documented line, not the default action's 143. Only the dynamic
+// loader's work comes before a program's .preinit_array; the launcher
+// (launcher.cpp) blocks the two signals over it, so they are unblocked
+// here, once the handlers are in: one that came meanwhile is delivered now.
+void InstallHandlersFirst(int, char**, char**) {
+  uavsim::core::InstallInterruptHandlers();
+  sigset_t termination;
+  sigemptyset(&termination);
+  sigaddset(&termination, SIGINT);
+  sigaddset(&termination, SIGTERM);
+  sigprocmask(SIG_UNBLOCK, &termination, nullptr);
+}
+__attribute__((section(".preinit_array"),
+               used)) void (*const kInstallHandlersFirst)(int, char**,
+                                                          char**) = InstallHandlersFirst;
+
 }  // namespace
 
 int main(int argc, char** argv) {
   try {
-    uavsim::core::InstallInterruptHandlers();
-    return Main(argc, argv);
+    uavsim::core::InstallInterruptHandlers();  // again: a library's initialiser may have reset them
+    uavsim::core::ThrowIfInterrupted();        // a request during the libraries' initialisers
+    const int rc = Main(argc, argv);
+    // A request the command did not poll for (it came during its last
+    // steps): answered like any other.
+    uavsim::core::ThrowIfInterrupted();
+    return rc;
   } catch (const uavsim::core::ConfigError& e) {
     std::cerr << e.what() << "\n";
     return kExitBadInput;
@@ -937,6 +1022,10 @@ int main(int argc, char** argv) {
     return kExitInterrupted;
   } catch (const std::bad_alloc&) {
     std::cerr << "uavsim: out of memory\n";
+    return kExitFailure;
+  } catch (const uavsim::pipeline::ScriptedEdgeFailure& e) {
+    std::cerr << "uavsim: " << e.what() << "\n";
+    if (g_verbose) std::cerr << e.traceback() << "\n";
     return kExitFailure;
   } catch (const std::exception& e) {
     std::cerr << "uavsim: " << e.what() << "\n";

@@ -20,6 +20,7 @@
 #include "results/run_directory.h"
 #include "sim/core/atomic_file.h"
 #include "sim/core/error.h"
+#include "sim/core/file_lock.h"
 #include "sim/core/interrupt.h"
 #include "sim/core/json_io.h"
 #include "sim/process_farm.h"
@@ -99,6 +100,7 @@ void RemoveRemains(const std::string& dir) {
 }
 
 void PrepareDir(const std::string& dir, const Json& record) {
+  results::RemoveStaleStaging(dir);  // what killed commands left beside it, of any name
   const fs::path file = fs::path(dir) / "reproduce.json";
   std::error_code ec;
   if (fs::is_regular_file(file, ec)) {
@@ -304,7 +306,9 @@ ReproduceOutcome RunReproduce(const Scenario& base, const ReproduceOptions& o) {
   }
   const bool coordinator = !world || world->rank() == 0;
 
-  // 1. The episode sets, each simulated once (every rank its share).
+  // 1. The episode sets, each simulated once (every rank its share). Rank 0
+  // locks DIR as it first prepares it, to the end.
+  std::optional<core::FileLock> lock;
   std::map<std::string, std::vector<pipeline::Episode>> sets;
   for (const std::string& set : SetsOf(plan)) {
     Scenario s = base;
@@ -321,8 +325,13 @@ ReproduceOutcome RunReproduce(const Scenario& base, const ReproduceOptions& o) {
     if (coordinator && !o.quiet)
       std::cerr << "uavsim reproduce: episode set " << set << " (" << p.episodes << " of "
                 << p.episode_s << " s)\n";
+    request.wait = o.wait;
     std::optional<std::vector<pipeline::Episode>> e = GatherEpisodes(
-        s, p, request, [&] { PrepareDir(dir, PlanRecord(base, plan, o.quick)); },
+        s, p, request,
+        [&] {
+          PrepareDir(dir, PlanRecord(base, plan, o.quick));
+          if (!lock) lock.emplace(dir + "/.lock", "uavsim reproduce: " + dir, o.wait);
+        },
         [&] {
           std::error_code ec;
           fs::remove_all(scratch, ec);

@@ -51,6 +51,10 @@ struct ReproduceOptions {
   int seeds = 0;             // training seeds (0: the plan's, 3)
   int episodes = 0;          // per set (0: the plan's)
   std::string command_line;  // written into every model's note and the report
+  // Another reproduction holds DIR's lock (DIR/.lock, flock'ed while this
+  // one runs): wait for it instead of refusing (core::UsageError naming its
+  // process).
+  bool wait = false;
 };
 
 // One training of the plan.

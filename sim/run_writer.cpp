@@ -25,6 +25,11 @@ core::Json Metrics(const FinishedRun& run) {
   metrics["rmse_m"] = rmse_json;
   metrics["windows"] = run.scores.windows();
   metrics["estimated_windows"] = windows_json;
+  // Estimates not finite or beyond the scenario's bounds by over a
+  // kilometre: counted here, not scored (WindowScorer::Score).
+  core::Json rejected_json = core::Json::object();
+  for (const auto& [method, n] : run.scores.rejected()) rejected_json[method] = n;
+  metrics["rejected_estimates"] = rejected_json;
   // Methods compared on the same windows: those every method estimated.
   metrics["common_windows"] = summary.common_windows;
   core::Json common_json = core::Json::object();

@@ -339,7 +339,7 @@ void CheckScenario(const Scenario& s, const std::string& file) {
 void SetPointer(Json& doc, const std::string& pointer, const Json& value, const std::string& file) {
   if (pointer.empty() || pointer[0] != '/')
     throw ConfigError(file, "", "--set " + pointer + ": expected a JSON pointer starting with /");
-  if (!doc.is_object()) throw ConfigError(file, "", "the document: is not a JSON object");
+  if (!doc.is_object()) throw ConfigError::AboutDocument(file, "is not a JSON object");
   Json* node = &doc;
   std::string at;
   std::size_t pos = 1;
@@ -405,8 +405,7 @@ void ApplyOverride(Json& doc, const std::string& assignment, const std::string& 
 
 Scenario ScenarioFromJson(const Json& doc, const std::string& file, const std::string& base_dir) {
   if (!doc.is_object())
-    throw ConfigError(file, "",
-                      "the document: expected an object, got " + core::DescribeValue(doc));
+    throw ConfigError::AboutDocument(file, "expected an object, got " + core::DescribeValue(doc));
   Scenario s;
   s.base_dir = base_dir;
   core::FromJson(doc, file, "", s);

@@ -1,5 +1,6 @@
 #include "sim/sensing_node.h"
 
+#include <new>
 #include <optional>
 #include <stdexcept>
 #include <utility>
@@ -11,6 +12,9 @@
 #include "sensors/fmcw_radar.h"
 #include "sensors/lidar.h"
 #include "sensors/radar_processor.h"
+#include "sim/core/error.h"
+#include "sim/core/interrupt.h"
+#include "sim/core/json_io.h"
 #include "sim/recorder.h"
 #include "sim/world_model.h"
 
@@ -224,8 +228,10 @@ NodeSensor::Preprocess NodeSensor::Acquire(double t_s, core::RngStream& noise) {
   Preprocess preprocess = DoAcquire(t_s, noise);
   if (!preprocess) throw std::logic_error("a sensor's capture gave nothing to pre-process");
   return [preprocess = std::move(preprocess)] {
+    // A frame may hold no raw data (a LiDAR that sees nothing: pointed at
+    // the sky, too far away, too fast to complete its pattern): the node
+    // sends "nothing seen" and the run goes on.
     NodeFrame frame = preprocess();
-    if (frame.raw_bytes == 0) throw std::logic_error("a sensor produced a frame of no raw data");
     if (frame.content.camera.has_value() == frame.content.points.has_value())
       throw std::logic_error("a node's pre-processing gave neither or both observation kinds");
     return frame;
@@ -338,9 +344,26 @@ NodeFrame SensingNode::TakeFrame(core::SimTime t) {
   return frame;
 }
 
+// A failure inside a frame names the node and the frame's time; a
+// termination request, a bad input and an exhausted memory pass unchanged.
+NodeFrame SensingNode::TakeFrameNamed(core::SimTime t) {
+  try {
+    return TakeFrame(t);
+  } catch (const core::Interrupted&) {
+    throw;
+  } catch (const core::ConfigError&) {
+    throw;
+  } catch (const std::bad_alloc&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw std::runtime_error("node " + config_.id + ", frame at t = " +
+                             core::FormatNumber(core::ToSeconds(t)) + " s: " + e.what());
+  }
+}
+
 void SensingNode::OnFrame(core::SimTime t) {
   const double t_s = core::ToSeconds(t);
-  NodeFrame frame = TakeFrame(t);
+  NodeFrame frame = TakeFrameNamed(t);
   if (frame.record) {
     const auto timing =
         core::WallProfile::Measure(wiring_.profile, "node/" + config_.id + "/record");

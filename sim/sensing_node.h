@@ -83,9 +83,9 @@ struct NodeFrame {
 
 class NodeSensor {
  public:
-  // Pre-processes one capture; throws std::logic_error if the sensor
-  // produced no raw data or the pre-processing neither or both observation
-  // kinds.
+  // Pre-processes one capture; throws std::logic_error if the
+  // pre-processing gave neither or both observation kinds. A frame may
+  // hold no raw data (a LiDAR whose beams hit nothing): raw_bytes 0.
   using Preprocess = std::function<NodeFrame()>;
   virtual ~NodeSensor() = default;
   Preprocess Acquire(double t_s, core::RngStream& noise);
@@ -162,6 +162,7 @@ class SensingNode {
   };
   void OnFrame(core::SimTime t);
   NodeFrame TakeFrame(core::SimTime t);
+  NodeFrame TakeFrameNamed(core::SimTime t);
   void MakeAhead(core::SimTime t);
 
   const NodeConfig& config_;

@@ -20,6 +20,7 @@
 
 #include "results/run_directory.h"
 #include "sim/core/error.h"
+#include "sim/core/file_lock.h"
 #include "sim/core/progress.h"
 #include "sim/process_farm.h"
 #include "sim/run.h"
@@ -106,6 +107,7 @@ bool PointDone(const std::string& dir, const std::string& id) {
 // Creates DIR (and DIR/points) for `record`, or checks that an existing DIR
 // holds the same sweep.
 void PrepareDir(const std::string& dir, const Json& record) {
+  results::RemoveStaleStaging(dir);  // what killed commands left beside it, of any name
   const fs::path file = fs::path(dir) / "sweep.json";
   std::error_code ec;
   if (fs::exists(file, ec)) {
@@ -127,6 +129,15 @@ void PrepareDir(const std::string& dir, const Json& record) {
   fs::create_directories(fs::path(dir) / "points", ec);
   if (ec) throw std::runtime_error(dir + ": cannot create folder: " + ec.message());
   results::WriteFileAtomic(file.string(), record.dump(2) + "\n");
+}
+
+// The lock of a sweep's folder, a shard's own (the shards of one grid run
+// side by side: their points differ).
+std::string LockPath(const SweepOptions& o) {
+  const std::string name = o.shard_count == 1 ? ".lock"
+                                              : ".lock-shard-" + std::to_string(o.shard_index) +
+                                                    "-of-" + std::to_string(o.shard_count);
+  return (fs::path(o.out_dir) / name).string();
 }
 
 // Removes the staging folders ".ID.partial-PID" of points killed mid-way
@@ -262,6 +273,7 @@ SweepOutcome RunSweep(const SweepSpec& spec, const SweepOptions& o) {
     out.ran += c.ran;
     out.failed += c.failed;
   };
+  std::optional<core::FileLock> lock;  // held to the end, the merge included
   try {
     if (!coordinator) {
       out.mpi_worker = true;
@@ -276,6 +288,7 @@ SweepOutcome RunSweep(const SweepSpec& spec, const SweepOptions& o) {
       std::string error;
       try {
         PrepareDir(o.out_dir, record);
+        lock.emplace(LockPath(o), "uavsim sweep: " + o.out_dir, o.wait);
         RemoveStalePartials(o.out_dir, ShardIds(spec, o));
         queue = PointsToRun(spec, o, out);
         ok = 1;
@@ -290,6 +303,7 @@ SweepOutcome RunSweep(const SweepSpec& spec, const SweepOptions& o) {
       add(RunFarmCoordinator(*world, farm, std::move(queue), fo));
     } else {
       PrepareDir(o.out_dir, record);
+      lock.emplace(LockPath(o), "uavsim sweep: " + o.out_dir, o.wait);
       RemoveStalePartials(o.out_dir, ShardIds(spec, o));
       queue = PointsToRun(spec, o, out);
       add(RunFarmLocal(farm, std::move(queue), fo));

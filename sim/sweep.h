@@ -35,6 +35,9 @@ struct SweepOptions {
   int shard_index = 0;  // --shard I/N
   int shard_count = 1;
   bool quiet = false;
+  // Another sweep holds DIR's lock (the same shard): wait for it instead of
+  // refusing (core::UsageError naming its process).
+  bool wait = false;
 };
 
 struct SweepOutcome {
@@ -49,7 +52,9 @@ struct SweepOutcome {
   std::vector<std::string> warnings;
 };
 
-// Throws core::UsageError for a DIR made by another spec, Interrupted when
+// DIR's file .lock (a shard's: .lock-shard-I-of-N) is flock'ed while the
+// sweep runs. Throws core::UsageError for a DIR made by another spec or
+// whose lock another sweep holds (unless options.wait), Interrupted when
 // a termination signal arrived (finished points stay), std::runtime_error
 // for I/O failures.
 SweepOutcome RunSweep(const SweepSpec& spec, const SweepOptions& options);

@@ -22,7 +22,7 @@ struct SpecReader {
   std::string file;
 
   [[noreturn]] void Fail(const std::string& at, const std::string& what) const {
-    throw ConfigError(file, at, (at.empty() ? "the document: " : "") + what);
+    throw at.empty() ? ConfigError::AboutDocument(file, what) : ConfigError(file, at, what);
   }
   void Keys(const Json& j, const std::string& at, const std::set<std::string>& allowed) const {
     if (!j.is_object()) Fail(at, "expected an object, got " + core::DescribeValue(j));
@@ -291,7 +291,7 @@ Json PointDocument(const SpecReader& r, const SweepSpec& out, const Json& base_j
       try {
         SetPointer(doc, ptr, val);
       } catch (const ConfigError& e) {
-        r.Fail(key, "point " + pt.id + ": " + e.pointer() + ": " + e.message());
+        r.Fail(key, "point " + pt.id + ": " + e.Located());
       }
       if (blame) blame->push_back({ptr, at, key});
     }
@@ -320,7 +320,7 @@ SweepPointSpec MakePoint(const SpecReader& r, const SweepSpec& out, const BaseSc
   try {
     ScenarioFromJson(doc, base.file, base.dir);
   } catch (const ConfigError& e) {
-    r.Fail(Blame(blame, e.pointer()), what + ": " + e.pointer() + ": " + e.message());
+    r.Fail(Blame(blame, e.pointer()), what + ": " + e.Located());
   }
   return pt;
 }

@@ -16,6 +16,7 @@
 #include "pipeline/training/dataset_io.h"
 #include "results/run_directory.h"
 #include "sim/core/error.h"
+#include "sim/core/file_lock.h"
 #include "sim/core/progress.h"
 #include "sim/core/rng.h"
 #include "sim/core/trajectory.h"
@@ -417,6 +418,13 @@ pipeline::TrainingConfig ResolveTrainingConfig(bool quick, const std::string& co
 
 namespace {
 
+// The lock of an episode file: ".NAME.lock" beside it (the file itself is
+// replaced by a rename when extended, so its own inode cannot hold a lock).
+std::string DataLockPath(const std::string& data_file) {
+  const fs::path p(data_file);
+  return (p.parent_path() / ("." + p.filename().string() + ".lock")).string();
+}
+
 // --encoders DIR: a model of this scenario whose encoders other variants can
 // use. Throws core::UsageError naming DIR.
 void CheckEncoderSource(const Scenario& base, const TrainCommand& c) {
@@ -482,9 +490,13 @@ std::optional<std::vector<pipeline::Episode>> GatherEpisodes(
     return std::nullopt;
   }
   std::vector<pipeline::Episode> episodes;
-  EpisodePlan todo = plan;  // all of them, unless --data holds some
+  EpisodePlan todo = plan;                  // all of them, unless --data holds some
+  std::optional<core::FileLock> data_lock;  // to the end: the file is read, then extended
   try {
     prepare();
+    if (!request.data_file.empty())
+      data_lock.emplace(DataLockPath(request.data_file),
+                        request.command + ": --data " + request.data_file, request.wait);
     std::error_code ec;
     if (!request.data_file.empty() && fs::is_regular_file(request.data_file, ec)) {
       SavedEpisodes saved = ReadSavedEpisodes(base, plan, request.episodes, request.keep_length,
@@ -527,6 +539,7 @@ std::optional<pipeline::TrainReport> RunTraining(const Scenario& base, const Tra
   // Rank 0 alone (under mpirun) trains and writes the model folder.
   std::optional<results::RunDirectory> dir;  // staged here: the folder is checked before simulating
   EpisodeRequest request{c.episodes, c.episode_s <= 0, c.data_file, c.jobs, c.quiet};
+  request.wait = c.wait;
   std::optional<std::vector<pipeline::Episode>> episodes = GatherEpisodes(
       base, plan, request,
       [&] {

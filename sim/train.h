@@ -88,10 +88,13 @@ SavedEpisodes ReadSavedEpisodes(const Scenario& base, const EpisodePlan& plan, i
 struct EpisodeRequest {
   int episodes = 0;          // asked for (0: the plan's); what --data is read to or extended to
   bool keep_length = false;  // --episode-s not given: a --data file's length holds
-  std::string data_file;     // --data (empty: none)
+  std::string data_file;     // --data (empty: none), flock'ed (.FILE.lock) while in use
   int jobs = 1;
   bool quiet = false;
   std::string command = "uavsim train";  // for messages
+  // Another command holds the --data file's lock (.FILE.lock beside it):
+  // wait for it instead of refusing (core::UsageError naming its process).
+  bool wait = false;
 };
 // The plan's episodes for such a command. Under mpirun (an MPI environment
 // held for the call) every rank simulates its share; rank 0 first runs
@@ -176,8 +179,10 @@ struct TrainCommand {
   int threads = 1;                    // LibTorch intra-op threads (see NOTES.md: 1 is fastest here)
   int jobs = 1;                       // episodes simulated at a time (per rank under mpirun)
   // Episode file: read if it exists (no simulation), else written after
-  // simulating. Empty: simulate, keep nothing.
+  // simulating. Empty: simulate, keep nothing. Locked while in use
+  // (EpisodeRequest::wait).
   std::string data_file;
+  bool wait = false;         // --wait: for another command's lock on data_file
   std::string command_line;  // written into the model's note
 };
 

@@ -1,5 +1,6 @@
 #include "sim/window_scorer.h"
 
+#include <algorithm>
 #include <utility>
 
 #include "sim/core/rain_attenuation.h"
@@ -17,6 +18,9 @@ channel::DownlinkScorer MakeDownlink(const Scenario& s, std::vector<std::string>
       core::RngStream(s.seed, stream));
 }
 
+// An estimate farther than this outside the scenario's bounds is no estimate.
+constexpr double kAbsurdBeyondBoundsM = 1000.0;
+
 }  // namespace
 
 WindowScorer::WindowScorer(const Scenario& scenario, std::vector<std::string> steered)
@@ -26,10 +30,39 @@ WindowScorer::WindowScorer(const Scenario& scenario, std::vector<std::string> st
       downlink_common_(MakeDownlink(scenario, std::move(steered), "base_station/downlink/common")) {
 }
 
+// The box of the nodes, the base station and the target's whole path
+// (its closed form, sampled every 0.25 s), grown by a kilometre.
+void WindowScorer::FindBounds(const WorldModel& world) {
+  lo_m_ = hi_m_ = scenario_.base_station.position_m;
+  const auto add = [&](const Eigen::Vector3d& p) {
+    lo_m_ = lo_m_.cwiseMin(p);
+    hi_m_ = hi_m_.cwiseMax(p);
+  };
+  for (const NodeConfig& n : scenario_.nodes) add(n.sensor.pose().position_m);
+  const double d = scenario_.duration_s;
+  for (double t = 0.0;; t = std::min(d, t + 0.25)) {
+    add(world.target().StateAt(t).position_m);
+    if (t >= d) break;
+  }
+  lo_m_.array() -= kAbsurdBeyondBoundsM;
+  hi_m_.array() += kAbsurdBeyondBoundsM;
+  bounded_ = true;
+}
+
 void WindowScorer::Score(double t_s, const Eigen::Vector3d& truth_m,
-                         const std::map<std::string, Eigen::Vector3d>& estimated,
+                         const std::map<std::string, Eigen::Vector3d>& raw_estimates,
                          WorldModel& world) {
+  if (!bounded_) FindBounds(world);
   ++windows_;
+  std::map<std::string, Eigen::Vector3d> estimated;
+  for (const auto& [method, p] : raw_estimates) {
+    const bool sane =
+        p.allFinite() && (p.array() >= lo_m_.array()).all() && (p.array() <= hi_m_.array()).all();
+    if (sane)
+      estimated.emplace(method, p);
+    else
+      ++rejected_[method];
+  }
   for (const auto& [method, p] : estimated) {
     using results::FormatFixed;
     estimates_.AddRow({FormatFixed(t_s, 6), method, FormatFixed(p.x(), 6), FormatFixed(p.y(), 6),
@@ -48,6 +81,12 @@ void WindowScorer::Score(double t_s, const Eigen::Vector3d& truth_m,
     downlink_common_.AddWindow(truth_m, steering, world);
     ++downlink_common_windows_;
   }
+}
+
+std::map<std::string, std::uint64_t> WindowScorer::rejected() const {
+  std::map<std::string, std::uint64_t> all = rejected_;
+  for (const std::string& method : scenario_.pipeline.methods) all[method];
+  return all;
 }
 
 std::map<std::string, RmseAccumulator> WindowScorer::rmse() const {

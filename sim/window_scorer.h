@@ -40,7 +40,9 @@ class WindowScorer {
 
   // One window ending at t_s with the target at truth_m; `estimated`:
   // method -> estimate (world ENU, metres). Poses `world` at t_s for the
-  // downlink's blockage and reflections.
+  // downlink's blockage and reflections. An estimate that is not finite,
+  // or lies more than 1 km outside the box of the nodes, the base station
+  // and the target's whole path, counts as no estimate (rejected()).
   void Score(double t_s, const Eigen::Vector3d& truth_m,
              const std::map<std::string, Eigen::Vector3d>& estimated, WorldModel& world);
 
@@ -52,11 +54,18 @@ class WindowScorer {
   std::uint64_t downlink_common_windows() const { return downlink_common_windows_; }
   // Per method that ran (every /pipeline/methods entry, estimated or not).
   std::map<std::string, RmseAccumulator> rmse() const;
+  // Per method that ran: the estimates refused as absurd (see Score).
+  std::map<std::string, std::uint64_t> rejected() const;
   // Per method over the windows every method estimated (two or more methods).
   const std::map<std::string, RmseAccumulator>& rmse_common() const { return rmse_common_; }
 
  private:
+  void FindBounds(const WorldModel& world);
+
   const Scenario& scenario_;
+  bool bounded_ = false;
+  Eigen::Vector3d lo_m_ = Eigen::Vector3d::Zero(), hi_m_ = Eigen::Vector3d::Zero();
+  std::map<std::string, std::uint64_t> rejected_;
   std::vector<std::string> steered_;
   channel::DownlinkScorer downlink_;
   channel::DownlinkScorer downlink_common_;

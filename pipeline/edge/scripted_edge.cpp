@@ -10,6 +10,9 @@
 #include <stdexcept>
 #include <utility>
 
+#include "sim/core/error.h"
+#include "sim/core/zip_check.h"
+
 namespace uavsim::pipeline {
 namespace {
 
@@ -25,10 +28,24 @@ std::string FirstLine(const std::string& s) {
   return end == std::string::npos ? s : s.substr(0, end);
 }
 
+// One line saying what went wrong: the first line of LibTorch's message,
+// or, when the model raised (the message opens with the interpreter's
+// preamble and a TorchScript traceback), its last line: the exception.
+std::string Gist(const std::string& s) {
+  const std::string first = FirstLine(s);
+  if (first.rfind("The following operation failed in the TorchScript interpreter", 0) != 0)
+    return first;
+  std::size_t end = s.find_last_not_of(" \n");
+  if (end == std::string::npos) return first;
+  const std::size_t begin = s.rfind('\n', end);
+  return s.substr(begin == std::string::npos ? 0 : begin + 1, end + 1 - (begin + 1));
+}
+
 }  // namespace
 
 struct ScriptedEdge::Impl {
   torch::jit::script::Module module;
+  std::string path;
   int latent_dim = 16;
   double window_s = 0.2;
   int history = 1;
@@ -84,8 +101,14 @@ std::unique_ptr<ScriptedEdge> ScriptedEdge::Load(const std::string& path, int la
   if (!std::filesystem::is_regular_file(path, ec))
     throw std::invalid_argument("no TorchScript file at " + path);
   auto impl = std::make_unique<Impl>();
+  impl->path = path;
   impl->latent_dim = latent_dim;
   impl->window_s = window_s;
+  try {
+    core::RequireWholeZip(path);  // a truncated file says so (issue 43)
+  } catch (const core::ConfigError& e) {
+    throw std::invalid_argument(e.what());
+  }
   try {
     impl->module = torch::jit::load(path, torch::kCPU);
   } catch (const c10::Error& e) {
@@ -152,15 +175,19 @@ std::optional<Eigen::Vector3d> ScriptedEdge::OnWindow(const WindowInputs& window
   torch::Tensor out;
   try {
     out = s.Forward().to(torch::kDouble).reshape({3}).contiguous();
-  } catch (const c10::Error& e) {
-    throw std::runtime_error("the TorchScript model failed at window " +
-                             std::to_string(window.window) + ": " +
-                             FirstLine(e.what_without_backtrace()));
+  } catch (const std::exception& e) {
+    const auto* c10 = dynamic_cast<const c10::Error*>(&e);
+    const std::string what = c10 ? c10->what_without_backtrace() : e.what();
+    throw ScriptedEdgeFailure(
+        s.path + ": forward failed at window " + std::to_string(window.window) + ": " + Gist(what),
+        what);
   }
-  const Eigen::Vector3d p(out[0].item<double>(), out[1].item<double>(), out[2].item<double>());
-  if (!p.allFinite()) return std::nullopt;
-  return p;
+  // A non-finite value is passed on: the run counts it as no estimate.
+  return Eigen::Vector3d(out[0].item<double>(), out[1].item<double>(), out[2].item<double>());
 }
+
+ScriptedEdgeFailure::ScriptedEdgeFailure(const std::string& line, std::string traceback)
+    : std::runtime_error(line), traceback_(std::move(traceback)) {}
 
 int ScriptedEdge::history_windows() const { return impl_->history; }
 int ScriptedEdge::latent_dim() const { return impl_->latent_dim; }

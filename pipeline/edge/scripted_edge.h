@@ -16,7 +16,9 @@
 //     mask      float32 [L, 3, F]     1 for a frame, 0 for padding
 //     returns   3 numbers (shape [3] or [1, 3]): the target's position at the
 //               end of window L - 1, world ENU metres; a non-finite value
-//               means no estimate for this window
+//               (or one more than 1 km outside the scenario's bounds) is
+//               no estimate for this window, counted in metrics.json's
+//               rejected_estimates
 //   L is the module's integer attribute `history_windows` (default 1): the
 //   windows before the run's first are all padding. F is the largest number
 //   of frames any modality has in any of the L windows (at least 1); z is
@@ -33,11 +35,25 @@
 #include <Eigen/Core>
 #include <memory>
 #include <optional>
+#include <stdexcept>
 #include <string>
 
 #include "pipeline/edge/te_align.h"
 
 namespace uavsim::pipeline {
+
+// The model failed while a run was going (it raised, or its output could
+// not be read as 3 numbers): what() is one line, "FILE: forward failed at
+// window K: WHAT" (WHAT: the first line of LibTorch's message, or the
+// exception the model raised); traceback() is LibTorch's whole message.
+class ScriptedEdgeFailure : public std::runtime_error {
+ public:
+  ScriptedEdgeFailure(const std::string& line, std::string traceback);
+  const std::string& traceback() const { return traceback_; }
+
+ private:
+  std::string traceback_;
+};
 
 class ScriptedEdge {
  public:
@@ -53,10 +69,11 @@ class ScriptedEdge {
   ScriptedEdge& operator=(const ScriptedEdge&) = delete;
 
   // Window k's estimate (windows in increasing k; skipped ones count as
-  // empty). Nothing until a window has held at least one frame, or when the
-  // model returns a non-finite value. Throws std::invalid_argument for k not
-  // after the previous window or a latent of the wrong size, std::runtime_error
-  // with the model's message when it fails.
+  // empty). Nothing until a window has held at least one frame; a
+  // non-finite value as the model returned it (the run counts it as no
+  // estimate, sim/window_scorer.h). Throws std::invalid_argument for k not
+  // after the previous window or a latent of the wrong size,
+  // ScriptedEdgeFailure when the model fails.
   std::optional<Eigen::Vector3d> OnWindow(const WindowInputs& window);
 
   int history_windows() const;

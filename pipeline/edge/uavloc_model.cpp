@@ -12,6 +12,7 @@
 #include "sim/core/atomic_file.h"
 #include "sim/core/error.h"
 #include "sim/core/json_io.h"
+#include "sim/core/zip_check.h"
 
 namespace uavsim::pipeline {
 
@@ -500,6 +501,7 @@ UavLocModel LoadUavLocModel(const std::string& path) {
   for (const auto& item : model->named_buffers()) expected[item.key()] = item.value().sizes().vec();
   if (!std::filesystem::is_regular_file(path))
     throw core::ConfigError(path, "", "model weights file not found");
+  core::RequireWholeZip(path);  // a truncated file says so (issue 43)
   try {
     torch::load(model, path);
   } catch (const c10::Error& e) {

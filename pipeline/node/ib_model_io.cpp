@@ -9,6 +9,7 @@
 #include "sim/core/atomic_file.h"
 #include "sim/core/error.h"
 #include "sim/core/json_io.h"
+#include "sim/core/zip_check.h"
 
 namespace uavsim::pipeline {
 namespace {
@@ -83,6 +84,7 @@ IbCcModel LoadIbCcModel(const std::string& json_path) {
                              ModalityName(file.config.modality) + " model configured in " +
                              json_path + ": ";
   const std::map<std::string, std::vector<std::int64_t>> shapes = TensorShapes(*model);
+  core::RequireWholeZip(weights.string());  // a truncated file says so (issue 43)
   try {
     torch::load(model, weights.string());
   } catch (const c10::Error& e) {

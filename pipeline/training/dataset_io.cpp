@@ -14,6 +14,8 @@
 #include <stdexcept>
 #include <type_traits>
 
+#include "sim/core/error.h"
+
 namespace uavsim::pipeline {
 namespace {
 
@@ -60,17 +62,18 @@ class Reader {
   template <class T>
   T Pod() {
     T v{};
-    in_.read(reinterpret_cast<char*>(&v), sizeof v);
-    if (!in_) Fail("truncated");
+    Read(&v, sizeof v);
     return v;
   }
   // A count of items of at least `item_bytes` each: refused when the rest
   // of the file cannot hold them (before anything is allocated).
   std::uint64_t Count(std::uint64_t item_bytes) {
+    const std::uint64_t at = Position();
     const auto n = Pod<std::uint64_t>();
-    const auto left = size_ - static_cast<std::uint64_t>(in_.tellg());
-    if (n > kMaxCount || n * item_bytes > left)
-      Fail("corrupt (a count of " + std::to_string(n) + ")");
+    const auto left = size_ - Position();
+    if (n > kMaxCount)
+      Fail("corrupt at byte " + std::to_string(at) + " (a count of " + std::to_string(n) + ")");
+    if (n * item_bytes > left) Truncated(at);
     return n;
   }
   Eigen::Vector3d Vec3() {
@@ -79,27 +82,38 @@ class Reader {
   }
   std::string String() {
     std::string s(Count(1), '\0');
-    in_.read(s.data(), static_cast<std::streamsize>(s.size()));
-    if (!in_) Fail("truncated");
+    Read(s.data(), s.size());
     return s;
   }
   std::vector<float> Floats() {
     std::vector<float> v(Count(4));
-    in_.read(reinterpret_cast<char*>(v.data()), static_cast<std::streamsize>(v.size() * 4));
-    if (!in_) Fail("truncated");
+    Read(v.data(), v.size() * 4);
     return v;
   }
   std::vector<float> Grey() {
     std::vector<std::uint8_t> b(Count(1));
-    in_.read(reinterpret_cast<char*>(b.data()), static_cast<std::streamsize>(b.size()));
-    if (!in_) Fail("truncated");
+    Read(b.data(), b.size());
     return GreyFloats(b.data(), b.size());
   }
+  // Bad input (exit 2), naming the file and where in it.
   [[noreturn]] void Fail(const std::string& what) const {
-    throw std::runtime_error(path_ + ": " + what + " (not an episode file of this uavsim?)");
+    throw core::ConfigError(path_, "", what);
   }
+  // A record at byte `at` that runs past the file's end.
+  [[noreturn]] void Truncated(std::uint64_t at) const {
+    Fail("truncated at byte " + std::to_string(at) + " of " + std::to_string(size_) +
+         " (an episode file cut short: written again, or copied whole?)");
+  }
+  std::uint64_t Position() const { return static_cast<std::uint64_t>(in_.tellg()); }
 
  private:
+  void Read(void* to, std::size_t bytes) {
+    const std::uint64_t at = Position();
+    if (bytes > size_ - at) Truncated(at);
+    in_.read(static_cast<char*>(to), static_cast<std::streamsize>(bytes));
+    if (!in_) Truncated(at);
+  }
+
   std::ifstream& in_;
   std::string path_;
   std::uint64_t size_;

@@ -45,8 +45,10 @@ std::vector<float> GreyFloats(const std::uint8_t* bytes, std::size_t n);
 // Writes atomically (temp file, then rename). Throws std::runtime_error
 // naming the path.
 void WriteEpisodes(const std::vector<Episode>& episodes, const std::string& path);
-// Throws std::runtime_error naming the path for a missing, truncated or
-// foreign file.
+// Throws std::runtime_error naming the path for a file that cannot be
+// opened, core::ConfigError (bad input) naming it for a foreign one ("not
+// an episode file"), a truncated one ("truncated at byte N of M": the
+// record at byte N runs past the file's M bytes) or a corrupt value.
 // `check_stop` (if set) is called before each episode and may throw (a
 // termination signal while a large file is read).
 std::vector<Episode> ReadEpisodes(const std::string& path,

@@ -66,8 +66,8 @@ UAVSIM_INSTANTIATE_VISIT(TrainingConfig);
 TrainingConfig TrainingConfigFromJson(const core::Json& doc, const std::string& file,
                                       TrainingConfig defaults) {
   if (!doc.is_object())
-    throw core::ConfigError(file, "",
-                            "the document: expected an object, got " + core::DescribeValue(doc));
+    throw core::ConfigError::AboutDocument(file,
+                                           "expected an object, got " + core::DescribeValue(doc));
   core::FromJson(doc, file, "", defaults);
   return defaults;
 }

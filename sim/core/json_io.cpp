@@ -246,23 +246,22 @@ const Json* JsonReader::Find(const char* key) {
   return it == node_.end() ? nullptr : &*it;
 }
 
-// The document itself has the empty pointer: messages about it say so.
-static std::string AboutDocument(const std::string& pointer) {
-  return pointer.empty() ? "the document: " : "";
+// The document itself has the empty pointer: its errors say "/".
+static ConfigError ErrorAt(const std::string& file, const std::string& pointer,
+                           const std::string& message) {
+  return pointer.empty() ? ConfigError::AboutDocument(file, message)
+                         : ConfigError(file, pointer, message);
 }
 
 void JsonReader::Fail(const char* key, const std::string& expected, const Json& got) const {
-  const std::string at = key && *key ? Child(key) : pointer_;
-  throw ConfigError(file_, at,
-                    AboutDocument(at) + "expected " + expected + ", got " + DescribeValue(got));
+  throw ErrorAt(file_, key && *key ? Child(key) : pointer_,
+                "expected " + expected + ", got " + DescribeValue(got));
 }
 
 void JsonReader::Check(bool ok, const char* key, const std::string& message) {
   // Held back until Finish: a misspelt key explains a broken rule better
   // than the rule does ({"from": 40, "too": 50} is about "too", not "to").
-  if (!ok && !deferred_)
-    deferred_ = ConfigError(file_, key && *key ? Child(key) : pointer_,
-                            AboutDocument(key && *key ? Child(key) : pointer_) + message);
+  if (!ok && !deferred_) deferred_ = ErrorAt(file_, key && *key ? Child(key) : pointer_, message);
 }
 
 void JsonReader::CheckSize(const char* key, std::size_t n, std::size_t min_size,

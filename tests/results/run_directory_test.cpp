@@ -93,11 +93,15 @@ TEST_CASE("RunDirectory: staging folders of dead processes are removed, live one
     RunDirectory run(dir + "/run", false);
     CHECK_FALSE(fs::exists(dead));
     CHECK_FALSE(fs::exists(dead_old));
-    CHECK(fs::exists(live));   // its process is alive: maybe another run in the making
-    CHECK(fs::exists(other));  // another name's
+    CHECK(fs::exists(live));  // its process is alive: maybe another run in the making
+    // Another name's too (issue 43: a killed `run --out k` left `.k.partial-PID`
+    // until a later run named k).
+    CHECK_FALSE(fs::exists(other));
   }
-  CHECK(uavsim::results::RemoveStaleStaging(dir + "/other") == 1);
+  fs::create_directories(other);
+  CHECK(uavsim::results::RemoveStaleStaging(dir + "/third") == 1);
   CHECK_FALSE(fs::exists(other));
+  CHECK(fs::exists(live));
 }
 
 TEST_CASE("RemoveStaleTemporaries: the temporary files of dead processes go, the rest stay",

@@ -243,3 +243,66 @@ TEST_CASE(
   CHECK(Split(SweepWith(dir, "mine", dir + "/mine.pt"), '\n')[0].find("rmse_mine") !=
         std::string::npos);
 }
+
+TEST_CASE(
+    "CLI: a TorchScript model's absurd answers are counted, not scored; one that fails at run "
+    "time is named with its file and window on one line",
+    "[sim][byom]") {
+  // Issue 43: 3.3e38 m was scored as an error of 3.3e38 m; a failure said
+  // "uavsim: shape '[3]' is invalid for input of size 10" or printed a
+  // TorchScript traceback.
+  const std::string dir = TempDir("byom-absurd");
+  const std::string far = dir + "/far.pt";
+  Script(dir, R"(
+class M(torch.nn.Module):
+    def forward(self, latents: Tensor, offsets_s: Tensor, mask: Tensor) -> Tensor:
+        if bool(mask[0, 1].sum() > 0.0):
+            return torch.tensor([float('nan'), 0.0, 0.0])
+        return torch.tensor([3.3e38, 0.0, 0.0])
+)",
+         far);
+  const auto methods = [](const std::string& name, const std::string& model) {
+    return R"(/pipeline/methods=["ekf",{"type":"torchscript","name":")" + name + R"(","edge":")" +
+           model + R"("}])";
+  };
+  const std::string out = dir + "/run";
+  const auto r = RunCli(
+      {"run", kDefault, "--duration", "1", "--out", out, "--quiet", "--set", methods("far", far)});
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  const Json metrics = uavsim::core::LoadJsonFile(out + "/metrics.json");
+  INFO(metrics.dump());
+  CHECK(metrics["rmse_m"]["far"].is_null());
+  CHECK(metrics["estimated_windows"]["far"] == 0);
+  CHECK(metrics["rejected_estimates"]["far"].get<int>() >= 4);  // 5 windows, the first maybe empty
+  CHECK(metrics["rejected_estimates"]["ekf"] == 0);
+  CHECK(ReadFile(out + "/estimates.csv").find(",far,") == std::string::npos);
+
+  const std::string raises = dir + "/raises.pt";
+  Script(dir, R"(
+class M(torch.nn.Module):
+    def forward(self, latents: Tensor, offsets_s: Tensor, mask: Tensor) -> Tensor:
+        if bool(mask.sum() > 0.0):
+            raise ValueError("no luck with this window")
+        return torch.zeros(3)
+)",
+         raises);
+  for (const bool verbose : {false, true}) {
+    std::vector<std::string> args{"run",     kDefault, "--duration",
+                                  "1",       "--out",  dir + "/failed",
+                                  "--quiet", "--set",  methods("unlucky", raises)};
+    if (verbose) args.push_back("--verbose");
+    const auto f = RunCli(args);
+    INFO(f.err);
+    CHECK(f.exit_code == 1);
+    CHECK_THAT(f.err, Catch::StartsWith("uavsim: method unlucky: " + raises +
+                                        ": forward failed at window "));
+    const std::string first = f.err.substr(0, f.err.find('\n'));
+    CHECK_THAT(first, Catch::EndsWith("no luck with this window"));
+    if (verbose)
+      CHECK_THAT(f.err, Catch::Contains("Traceback"));
+    else
+      CHECK(std::count(f.err.begin(), f.err.end(), '\n') == 1);
+    CHECK_FALSE(fs::exists(dir + "/failed"));
+  }
+}

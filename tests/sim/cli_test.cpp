@@ -249,10 +249,10 @@ TEST_CASE("CLI: inputs that are not regular files are refused at once, naming th
   const auto big = RunCli({"validate", dir + "/big.json"});
   CHECK(big.exit_code == 2);
   CHECK(big.err == dir + "/big.json: file is 67108865 bytes; the limit is 67108864 (64 MiB)\n");
-  // The top-level value's errors say they are about the document.
+  // The top-level value's errors point at the document itself: "/" (issue 43).
   WriteFile(dir + "/array.json", "[1]");
   CHECK(RunCli({"validate", dir + "/array.json"}).err ==
-        dir + "/array.json: the document: expected an object, got an array of 1\n");
+        dir + "/array.json: /: expected an object, got an array of 1\n");
   // --set errors name the scenario file, then the pointer.
   const auto set = RunCli({"validate", kDefault, "--set", "/nodes/01/id=x"});
   CHECK(set.exit_code == 2);
@@ -565,7 +565,8 @@ TEST_CASE("CLI: a killed run leaves nothing under its final name", "[sim][slow]"
     CHECK_FALSE(fs::exists(out));
   }
   // After SIGTERM the staging folder is cleaned up too; after SIGKILL only a
-  // hidden .partial folder can remain, until the next run of that name.
+  // hidden .partial folder can remain, until the next command writing into
+  // that folder, whatever its name (issue 43): here the SIGTERM run.
   const std::string killed_prefix = ".out" + std::to_string(SIGKILL) + ".partial-";
   std::size_t stale = 0;
   for (auto& e : fs::directory_iterator(dir)) {
@@ -574,7 +575,7 @@ TEST_CASE("CLI: a killed run leaves nothing under its final name", "[sim][slow]"
     CHECK((name == "long.json" || name.rfind(killed_prefix, 0) == 0));
     stale += name.rfind(killed_prefix, 0) == 0;
   }
-  CHECK(stale == 1);
+  CHECK(stale == 0);
   WriteFile(dir + "/short.json", R"({"duration_s": 0.5, "nodes": []})");
   REQUIRE(RunCli({"run", dir + "/short.json", "--out", dir + "/out" + std::to_string(SIGKILL),
                   "--quiet"})
@@ -583,4 +584,88 @@ TEST_CASE("CLI: a killed run leaves nothing under its final name", "[sim][slow]"
     INFO(e.path());
     CHECK(e.path().filename().string().rfind(killed_prefix, 0) != 0);
   }
+}
+
+TEST_CASE("CLI: validate refuses a model without checksums whose files run would refuse", "[sim]") {
+  // Issue 43: a folder without checksums.sha256 and with a truncated
+  // radar.pt passed validate (exit 0) and run refused it (exit 2).
+  const std::string dir = TempDir("unchecked");
+  fs::copy(std::string(UAVSIM_SOURCE_DIR) + "/models/default", dir + "/m",
+           fs::copy_options::recursive);
+  fs::remove(dir + "/m/checksums.sha256");
+  const std::vector<std::string> validate{"validate", kDefault, "--set",
+                                          "/pipeline/model=" + dir + "/m"};
+  // Whole: accepted, with a warning that nothing vouches for the files.
+  const auto whole = RunCli(validate);
+  INFO(whole.err);
+  CHECK(whole.exit_code == 0);
+  CHECK(whole.err == kDefault + ": /pipeline/model: warning: " + dir +
+                         "/m/model.json: its folder has no checksums.sha256 (a model from "
+                         "before they were kept): checked by loading it\n");
+  const std::uintmax_t size = fs::file_size(dir + "/m/radar.pt");
+  fs::resize_file(dir + "/m/radar.pt", size / 2);
+  std::vector<std::string> run{"run",        kDefault,  "--duration",
+                               "1",          "--quiet", "--out",
+                               dir + "/run", "--set",   "/pipeline/model=" + dir + "/m"};
+  const auto by_run = RunCli(run);
+  const auto by_validate = RunCli(validate);
+  INFO(by_run.err << by_validate.err);
+  CHECK(by_run.exit_code == 2);
+  CHECK(by_validate.exit_code == 2);
+  CHECK(CountLines(by_validate.err) == 1);
+  CHECK_THAT(by_validate.err, Catch::Contains(dir + "/m/radar.pt"));
+  CHECK(by_validate.err == by_run.err);
+  CHECK_FALSE(fs::exists(dir + "/run"));
+}
+
+TEST_CASE("CLI: a sensor that sees nothing sends empty frames and the run goes on", "[sim]") {
+  // Issue 43: a LiDAR frame without a hit stopped the run (exit 1, "a
+  // sensor produced a frame of no raw data", naming no node).
+  const std::string dir = TempDir("sees-nothing");
+  struct Case {
+    std::vector<std::string> sets;
+    std::uint64_t frames;
+  };
+  const std::vector<Case> cases = {
+      {{"/nodes/1/sensor/pose/rpy_deg/1=-90"}, 4},         // at the sky
+      {{"/nodes/1/sensor/pose/position_m/2=1000000"}, 4},  // far above everything
+      {{"/nodes/1/sensor/rate_hz=2000"}, 800}};            // too fast for a pattern
+  int n = 0;
+  for (const Case& c : cases) {
+    const std::string out = dir + "/run" + std::to_string(n++);
+    std::vector<std::string> args{"run", kDefault, "--duration", "0.4", "--out", out, "--quiet"};
+    for (const std::string& set : c.sets) args.insert(args.end(), {"--set", set});
+    INFO(c.sets.front());
+    const auto r = RunCli(args);
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    const Json metrics = uavsim::core::LoadJsonFile(out + "/metrics.json");
+    CHECK(metrics["modalities"]["lidar"]["frames"].get<std::uint64_t>() >= c.frames);
+    if (n == 2) CHECK(metrics["data_rate_kBps"]["lidar"]["raw"].get<double>() == 0.0);
+  }
+}
+
+TEST_CASE("CLI: validate says what a run will cost; run refuses a recording the disk cannot hold",
+          "[sim]") {
+  // Issue 43: duration_s up to 86 400 was accepted with no estimate, and a
+  // recording ran until the disk was full. A LiDAR of 2e7 points a second
+  // for a day records 20 bytes a point: 3.5e13 bytes, beyond any disk here.
+  const std::string dir = TempDir("cost");
+  WriteFile(dir + "/day.json", R"({"duration_s": 86400, "nodes": [{"id": "l", "sensor":
+      {"type": "lidar", "preset": "livox_rosette", "points_per_s": 2e7}, "uplink": "default"}]})");
+  const auto v = RunCli({"validate", dir + "/day.json", "--record", "lidar"});
+  INFO(v.err);
+  CHECK(v.exit_code == 0);
+  CHECK_THAT(v.out, Catch::Contains(" of wall time here; --record writes at most 3.46e+13 bytes)"));
+  const auto plain = RunCli({"validate", dir + "/day.json"});
+  CHECK_THAT(plain.out, Catch::Contains(" of wall time here)\n"));
+  CHECK_THAT(plain.out, Catch::Contains("about "));
+  const auto r = RunCli({"run", dir + "/day.json", "--record", "lidar", "--out", dir + "/run"});
+  INFO(r.err);
+  CHECK(r.exit_code == 2);
+  CHECK(CountLines(r.err) == 1);
+  CHECK_THAT(r.err, Catch::StartsWith("uavsim run: --record would write up to 3.46e+13 bytes; the "
+                                      "file system of " +
+                                      dir + "/run has "));
+  CHECK_FALSE(fs::exists(dir + "/run"));
 }

@@ -428,7 +428,7 @@ TEST_CASE(
     CHECK(CountLines(r.err) == 1);
     CHECK(r.out.empty());
     if (c.pointer.empty())
-      CHECK_THAT(r.err, Catch::StartsWith(spec + ": the document: missing"));
+      CHECK_THAT(r.err, Catch::StartsWith(spec + ": /: missing"));
     else if (c.pointer.back() == '/')
       CHECK_THAT(r.err, Catch::StartsWith(spec + ": " + c.pointer));
     else
@@ -628,12 +628,14 @@ TEST_CASE("Sweep: SIGINT or SIGTERM stops a sweep with exit 130, keeping finishe
       "seeds": [1, 2])"));
   const std::string out = root + "/big-out";
   Background sweep({"sweep", big, "--out", out, "--quiet"}, root + "/big-log");
-  // Once uavsim (not the test's fork before exec) handles SIGTERM (/proc's
-  // SigCgt mask), it is reading the spec and then checking its 40 000 points.
+  // Once uavsim (not the test's fork before exec; the program proper the
+  // launcher runs, uavsim-main) handles SIGTERM (/proc's SigCgt mask), it
+  // is reading the spec and then checking its 40 000 points.
   const auto handles_sigterm = [pid = sweep.pid()] {
     const std::string proc = "/proc/" + std::to_string(pid);
     std::error_code ec;
-    if (fs::read_symlink(proc + "/exe", ec) != fs::canonical(UAVSIM_CLI)) return false;
+    const std::string main = fs::canonical(UAVSIM_CLI).string() + "-main";
+    if (fs::read_symlink(proc + "/exe", ec).string() != main) return false;
     std::istringstream status(ReadFile(proc + "/status"));
     std::string line;
     while (std::getline(status, line))
@@ -837,4 +839,54 @@ TEST_CASE("Sweep: a point that fails costs that point only, a rerun retries it",
   REQUIRE(rows.size() == 3);
   CHECK_THAT(rows[1], Catch::StartsWith("p0000,ekf,1,"));
   CHECK_THAT(rows[2], Catch::StartsWith("p0001,uavloc,1,"));
+}
+
+namespace {
+// Whether process `pid` has `path` open.
+bool HasOpen(pid_t pid, const std::string& path) {
+  std::error_code ec;
+  const fs::path target = fs::weakly_canonical(path, ec);
+  for (const auto& e : fs::directory_iterator("/proc/" + std::to_string(pid) + "/fd", ec)) {
+    std::error_code rl;
+    if (fs::read_symlink(e.path(), rl) == target) return true;
+  }
+  return false;
+}
+
+// Whether DIR/.lock names process `pid` as its holder.
+bool LockNames(const std::string& dir, pid_t pid) {
+  std::error_code ec;
+  if (!fs::exists(dir + "/.lock", ec)) return false;
+  return ReadFile(dir + "/.lock").rfind(std::to_string(pid) + " ", 0) == 0;
+}
+}  // namespace
+
+TEST_CASE("Sweep: a second sweep into the same folder is refused naming the first, or waits",
+          "[sim][sweep][slow]") {
+  // Issue 43: two sweeps with one --out ran the same points, both exited
+  // 1 and neither wrote summary.csv.
+  const std::string root = TempDir("sweep-lock");
+  const std::string spec = root + "/lock.json";
+  WriteFile(spec, CheapSpec("lock", R"("seeds": {"from": 1, "count": 8})"));
+  const std::string out = root + "/out";
+  Background first({"sweep", spec, "--out", out, "--quiet"}, root + "/first");
+  REQUIRE(first.WaitFor([&] { return LockNames(out, first.pid()); }));
+  const CliResult refused = RunCli({"sweep", spec, "--out", out, "--quiet"});
+  INFO(refused.err);
+  CHECK(refused.exit_code == 2);
+  CHECK(CountLines(refused.err) == 1);
+  CHECK_THAT(refused.err, Catch::StartsWith("uavsim sweep: " + out + ": in use by process " +
+                                            std::to_string(first.pid()) + " ("));
+  CHECK_THAT(refused.err, Catch::EndsWith("pass --wait to wait for it\n"));
+  // With --wait it waits (it has the lock file open, the first still holds
+  // it), then runs once the first has gone.
+  Background second({"sweep", spec, "--out", out, "--quiet", "--wait"}, root + "/second");
+  REQUIRE(second.WaitFor([&] { return HasOpen(second.pid(), out + "/.lock"); }));
+  CHECK(LockNames(out, first.pid()));
+  kill(first.pid(), SIGTERM);
+  CHECK(first.Wait() == 130);
+  CHECK(second.Wait() == 0);
+  INFO(ReadFile(root + "/second.err"));
+  CHECK(FinishedPoints(out).size() == 8);
+  CHECK(fs::exists(out + "/summary.csv"));
 }

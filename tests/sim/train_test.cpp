@@ -788,3 +788,26 @@ TEST_CASE(
                            "late_fusion", "modality_dropout", "hemis", "mlp_bottleneck", "raw"})
     CHECK_THAT(help.out, Catch::Contains(std::string("\n  ") + name + " "));
 }
+
+TEST_CASE("CLI: a second training on one --data file is refused naming the first", "[sim][train]") {
+  // Issue 43: two commands extending one episode file at once.
+  const std::string dir = TempDir("train-data-lock");
+  const std::string data = dir + "/episodes.eps";
+  const std::string lock = dir + "/.episodes.eps.lock";
+  uavsim::testing::Background first(
+      {"train", kDefault, "--quick", "--data", data, "--out", dir + "/m1", "--quiet"},
+      dir + "/first");
+  REQUIRE(first.WaitFor([&] {
+    std::error_code ec;
+    return fs::exists(lock, ec) && ReadFile(lock).rfind(std::to_string(first.pid()) + " ", 0) == 0;
+  }));
+  const auto second =
+      RunCli({"train", kDefault, "--quick", "--data", data, "--out", dir + "/m2", "--quiet"});
+  INFO(second.err);
+  CHECK(second.exit_code == 2);
+  CHECK_THAT(second.err, Catch::StartsWith("uavsim train: --data " + data + ": in use by process " +
+                                           std::to_string(first.pid()) + " ("));
+  CHECK_FALSE(fs::exists(dir + "/m2"));
+  kill(first.pid(), SIGTERM);
+  CHECK(first.Wait() == 130);
+}

@@ -107,7 +107,7 @@ def forward(self, latents, offsets_s, mask):
 
 TEST_CASE(
     "ScriptedEdge: without history_windows a model sees the current window only; a "
-    "non-finite output is no estimate",
+    "non-finite output is passed on for the run to reject",
     "[pipeline][scripted]") {
   const std::string dir = uavsim::testing::TempDir("scripted-edge");
   auto s = ScriptedEdge::Load(SaveModule(dir, "one", kSummary), 4, 0.2);
@@ -129,7 +129,50 @@ def forward(self, latents, offsets_s, mask):
     return torch.full([1, 3], float('nan'))
 )"),
                                 4, 0.2);
-  CHECK_FALSE(nan->OnWindow(w));
+  // The run's scorer counts it in rejected_estimates (issue 43) rather than
+  // dropping it unseen.
+  const auto p3 = nan->OnWindow(w);
+  REQUIRE(p3);
+  CHECK_FALSE(p3->allFinite());
+}
+
+TEST_CASE(
+    "ScriptedEdge: a model that fails at run time says which file, at which window, on one "
+    "line",
+    "[pipeline][scripted]") {
+  // Issue 43: "shape '[3]' is invalid for input of size 10" named nothing;
+  // a raise printed a multi-line TorchScript traceback.
+  const std::string dir = uavsim::testing::TempDir("scripted-edge-fails");
+  const auto failure_of = [](ScriptedEdge& s, const WindowInputs& w) {
+    try {
+      s.OnWindow(w);
+    } catch (const uavsim::pipeline::ScriptedEdgeFailure& e) {
+      return std::make_pair(std::string(e.what()), e.traceback());
+    }
+    return std::make_pair(std::string("no failure"), std::string());
+  };
+  WindowInputs w;
+  w.window = 7;
+  w.frames[0] = {Frame(1.3, {1, 1, 1, 1})};
+  // Three numbers on padding (Load's check), ten once a frame is there.
+  const std::string wide = SaveModule(dir, "wide", R"(
+def forward(self, latents, offsets_s, mask):
+    return torch.zeros([3 + 7 * int(mask.sum() > 0.0)])
+)");
+  auto s = ScriptedEdge::Load(wide, 4, 0.2);
+  const auto [line, traceback] = failure_of(*s, w);
+  CHECK(line == wide + ": forward failed at window 7: shape '[3]' is invalid for input of size 10");
+  const std::string raises = SaveModule(dir, "raises", R"(
+def forward(self, latents, offsets_s, mask):
+    assert bool(mask.sum() == 0.0), "no luck with this window"
+    return torch.zeros([3])
+)");
+  auto r = ScriptedEdge::Load(raises, 4, 0.2);
+  const auto [raised, raised_traceback] = failure_of(*r, w);
+  CHECK_THAT(raised, Catch::StartsWith(raises + ": forward failed at window 7: "));
+  CHECK_THAT(raised, Catch::EndsWith("no luck with this window"));
+  CHECK(raised.find('\n') == std::string::npos);
+  CHECK_THAT(raised_traceback, Catch::Contains("Traceback"));
 }
 
 TEST_CASE("ScriptedEdge: files that are not such a model are refused with what was expected",

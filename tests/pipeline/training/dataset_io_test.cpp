@@ -14,6 +14,7 @@
 
 #include "pipeline/training/dataset.h"
 #include "pipeline/training/dataset_io.h"
+#include "sim/core/error.h"
 #include "test_support.h"
 
 namespace uavsim::pipeline {
@@ -349,10 +350,28 @@ TEST_CASE("DatasetIo: a truncated file is refused with its path named", "[pipeli
   const std::string cut = dir + "/cut.bin";
   testing::WriteFile(cut, bytes);
   CHECK(ReadEpisodes(cut).size() == 3);  // the whole file still reads
+  // Bad input (exit 2) that says where the file ends (issue 43: exit 1 and
+  // "corrupt (a count of 16384)").
+  const auto bad_input_of = [&] {
+    try {
+      ReadEpisodes(cut);
+    } catch (const core::ConfigError& e) {
+      return std::string(e.what());
+    } catch (const std::exception& e) {
+      return std::string("not a ConfigError: ") + e.what();
+    }
+    return std::string();
+  };
   for (std::size_t n = bytes.size(); n-- > 0;) {
     fs::resize_file(cut, n);
     INFO("first " << n << " of " << bytes.size() << " bytes");
-    CHECK_THAT(RuntimeErrorOf([&] { ReadEpisodes(cut); }), Catch::Contains(cut));
+    const std::string what = bad_input_of();
+    if (n < 8) {
+      CHECK(what == cut + ": not an episode file");
+      continue;
+    }
+    CHECK_THAT(what, Catch::StartsWith(cut + ": truncated at byte "));
+    CHECK_THAT(what, Catch::Contains(" of " + std::to_string(n) + " ("));
   }
 }
 

@@ -83,3 +83,29 @@ TEST_CASE("JsonIo: a resolved scenario reads back to itself", "[core]") {
   CHECK(first["nodes"][0]["sensor"]["type"] == "fisheye_stereo");
   CHECK(first["weather"]["fog_visibility_m"].is_null());
 }
+
+TEST_CASE("JsonIo: error lines show a pointer unambiguously, the document as /", "[core]") {
+  using uavsim::core::ShowPointer;
+  using uavsim::core::WeatherConfig;
+  // Unchanged: the pointers of every earlier error line (issue 43).
+  CHECK(ShowPointer("/nodes/1/sensor/rate_hz") == "/nodes/1/sensor/rate_hz");
+  CHECK(ShowPointer("/weather/rain~1h") == "/weather/rain~1h");
+  CHECK(ShowPointer("/links/") == "/links/");
+  CHECK(ShowPointer("line 7, column 3") == "line 7, column 3");
+  // A space or a colon would run into the line's ": " separators: quoted,
+  // with JSON's escapes; "/" (the key "" at the top) too, apart from the
+  // document itself.
+  CHECK(ShowPointer("/uavs/0/ name") == "\"/uavs/0/ name\"");
+  CHECK(ShowPointer("/a:b") == "\"/a:b\"");
+  CHECK(ShowPointer("/a b/\"q\\") == "\"/a b/\\\"q\\\\\"");
+  CHECK(ShowPointer("/") == "\"/\"");
+  CHECK(std::string(ConfigError("f.json", "/uavs/0/ name", "unknown key").what()) ==
+        "f.json: \"/uavs/0/ name\": unknown key");
+  const ConfigError root = ConfigError::AboutDocument("f.json", "expected an object, got 42");
+  CHECK(std::string(root.what()) == "f.json: /: expected an object, got 42");
+  CHECK(root.pointer().empty());
+  WeatherConfig w;
+  CHECK(ConfigErrorOf([&] {
+          uavsim::core::FromJson(Json::parse(R"({" rain_mm_h": 1})"), "w.json", "/weather", w);
+        }) == "w.json: \"/weather/ rain_mm_h\": unknown key (did you mean \"rain_mm_h\"?)");
+}

@@ -1,0 +1,28 @@
+// What a run will cost before it starts (issue 43): its wall time on this
+// machine, estimated from the rays and the frames per simulated second, and
+// the bytes `--record` would write. Upper estimates for the disk (a PNG or
+// PLY at most its raw frame plus headers); the wall time from per-ray and
+// per-frame costs measured on the project's 2-core reference machine under
+// load (NOTES.md, 2026-12-04: an upper estimate on an idle one), scaled by
+// this machine's core count.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "sim/scenario.h"
+
+namespace uavsim::sim {
+
+// Seconds of wall time the run would take here (its set-up included).
+double EstimateWallSeconds(const Scenario& s);
+
+// Bytes `uavsim run --record` of `modalities` ("camera", "lidar", "radar")
+// would write under DIR/frames, at most.
+double EstimateRecordBytes(const Scenario& s, const std::vector<std::string>& modalities);
+
+// Free bytes of the file system that holds `path` (or its nearest existing
+// parent folder); -1 if unknown.
+double FreeBytesFor(const std::string& path);
+
+}  // namespace uavsim::sim
