@@ -328,6 +328,7 @@ void DecoderFigures(Writer& w, const Arms& arms, const ReproducePlan& plan) {
     spec.log_x = true;
     spec.y_min_zero = true;
     spec.key_below = true;
+    spec.png_path = (fs::path(w.dir) / (name + ".png")).string();
     w.Warn(name + ".png",
            results::PlotCsv((fs::path(w.dir) / (name + "_limit.csv")).string(), spec));
     w.doc.Image(name + ".png", spec.title);

@@ -28,7 +28,7 @@ struct TrainingConfig {
   // Stage 1 (per modality).
   double stage1_lr = 1e-3;  // Adam
   int stage1_batch = 32;
-  int stage1_max_epochs = 100;  // early stopping ends it (the point encoders were still learning at 30)
+  int stage1_max_epochs = 30;
   int stage1_patience = 6;
   int stage1_min_samples_per_epoch = 640;    // small data sets are cycled ...
   int stage1_max_samples_per_epoch = 3000;   // ... large ones sampled
@@ -87,7 +87,7 @@ struct TrainingConfig {
   // (the paper) or relative to their centroid, the centroid joined to the
   // pooled feature (ours); BatchNorm after each convolution (the paper),
   // GroupNorm of each point's channels, or none (ours).
-  PointFrame point_frame = PointFrame::kCentroid;
+  PointFrame point_frame = PointFrame::kScene;
   PointNorm point_norm = PointNorm::kBatch;
   // Anchored head: weight of the candidate-selection loss added to the
   // position loss, the cross-entropy of the candidate weights against the

@@ -274,7 +274,9 @@ class M(torch.nn.Module):
   INFO(metrics.dump());
   CHECK(metrics["rmse_m"]["far"].is_null());
   CHECK(metrics["estimated_windows"]["far"] == 0);
-  CHECK(metrics["rejected_estimates"]["far"].get<int>() >= 4);  // 5 windows, the first maybe empty
+  // 5 windows; the first one or two see no latent yet (the default scenario's
+  // radar sends from its second frame on: its persistent selection).
+  CHECK(metrics["rejected_estimates"]["far"].get<int>() >= 3);
   CHECK(metrics["rejected_estimates"]["ekf"] == 0);
   CHECK(ReadFile(out + "/estimates.csv").find(",far,") == std::string::npos);
 

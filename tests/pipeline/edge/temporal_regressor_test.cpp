@@ -6,6 +6,7 @@
 #include <torch/torch.h>
 
 #include <catch2/catch.hpp>
+#include <fstream>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -253,10 +254,16 @@ TEST_CASE("TemporalRegressor: a short fit of a toy sequence task lowers the loss
 TEST_CASE("UavLocModel: a sidecar without \"temporal\" loads as the Mamba, weight for weight",
           "[pipeline]") {
   InitTorch(1, 47);
-  // The shipped model, saved before the choice existed.
-  const core::Json sidecar = core::LoadJsonFile(SidecarPath(kShippedEdge));
-  REQUIRE_FALSE(sidecar.contains("temporal"));
-  UavLocModel model = LoadUavLocModel(kShippedEdge);
+  // The shipped model as a model saved before the choice existed: its
+  // sidecar without the key (the weights are the Mamba's either way).
+  core::Json sidecar = core::LoadJsonFile(SidecarPath(kShippedEdge));
+  REQUIRE(sidecar.value("temporal", std::string("mamba")) == "mamba");
+  sidecar.erase("temporal");
+  const std::string old_edge = testing::TempDir("temporal_old_sidecar") + "/uavloc.pt";
+  std::filesystem::copy_file(kShippedEdge, old_edge,
+                             std::filesystem::copy_options::overwrite_existing);
+  std::ofstream(SidecarPath(old_edge)) << sidecar.dump(2);
+  UavLocModel model = LoadUavLocModel(old_edge);
   REQUIRE(model->config().temporal == TemporalKind::kMamba);
   REQUIRE(model->regressor->kind() == TemporalKind::kMamba);
   REQUIRE_FALSE(model->regressor->mamba.is_empty());

@@ -51,6 +51,8 @@ TrainingConfig AllChanged() {
   c.camera_stereo_branches = StereoBranches::kTwo;
   c.camera_eye_pool_side = 8;
   c.camera_roi_geometry = false;
+  c.point_frame = PointFrame::kCentroid;
+  c.point_norm = PointNorm::kGroup;
   c.selection_weight = 0.5;
   c.selection_radius_m = 1.5;
   c.filter_preference_m = 0.0;
@@ -209,10 +211,15 @@ TEST_CASE("ModelManifest: records the training config, and reads models without 
   WriteModelManifest(old, dir + "/old.json");
   CHECK_FALSE(Json::parse(testing::ReadFile(dir + "/old.json")).contains("training"));
   CHECK_FALSE(ReadModelManifest(dir + "/old.json").training.has_value());
-  // The shipped model was trained with the defaults, and says so.
+  // The shipped model was trained with the defaults but for the two keys its
+  // command sets (README: point_frame centroid, stage 1 up to 100 epochs),
+  // and says so.
   const ModelManifest shipped = ReadModelManifest(DefaultModelPath());
   REQUIRE(shipped.training.has_value());
-  CHECK(TrainingConfigJson(*shipped.training).dump() == TrainingConfigJson({}).dump());
+  TrainingConfig expected;
+  expected.point_frame = PointFrame::kCentroid;
+  expected.stage1_max_epochs = 100;
+  CHECK(TrainingConfigJson(*shipped.training).dump() == TrainingConfigJson(expected).dump());
 
   // The block is read as strictly as a config file.
   testing::WriteFile(dir + "/bad.json",
