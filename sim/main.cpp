@@ -74,7 +74,7 @@ const char* kMainHelp =
 
 const char* kValidateHelp =
     "usage: uavsim validate SCENARIO.json [MORE.json]... [--set /json/pointer=value]...\n"
-    "                       [--record camera,lidar,radar] [--resolved] [--quiet]\n"
+    "                       [--record camera,lidar,radar,mcap] [--resolved] [--quiet]\n"
     "\n"
     "Checks each SCENARIO.json strictly (unknown keys, types, ranges, references, files,\n"
     "meshes, the trained model's manifest and checksums, resource limits: rays and\n"
@@ -91,7 +91,7 @@ const char* kValidateHelp =
 
 const char* kRunHelp =
     "usage: uavsim run SCENARIO.json [--out DIR] [--seed N] [--duration S] [--record "
-    "camera,lidar,radar]\n"
+    "camera,lidar,radar,mcap]\n"
     "                               [--set /json/pointer=value]... [--force] [--quiet] "
     "[--verbose]\n"
     "\n"
@@ -108,7 +108,9 @@ const char* kRunHelp =
     "  --out DIR       run directory (refused if it exists, unless --force)\n"
     "  --seed N        override the scenario's seed (same as --set /seed=N)\n"
     "  --duration S    override duration_s (same as --set /duration_s=S)\n"
-    "  --record LIST   record raw frames of these modalities under DIR/frames/\n"
+    "  --record LIST   record raw frames of these modalities under DIR/frames/; mcap:\n"
+    "                  DIR/recording.mcap, every sensor, the world, truth, estimates and\n"
+    "                  uplink in one file for Foxglove (README: \"Recordings in Foxglove\")\n"
     "  --set P=V       override the value at JSON pointer P\n"
     "  --force         replace DIR if it exists\n"
     "  --quiet         no progress or summary output\n"
@@ -405,16 +407,17 @@ const std::string& OneScenario(const std::string& cmd, const ParsedArgs& a) {
   return a.positional[0];
 }
 
-// --record LIST: camera, lidar and radar, comma-separated (none: empty).
+// --record LIST: camera, lidar, radar and mcap, comma-separated (none: empty).
 std::vector<std::string> RecordList(const std::string& cmd, const ParsedArgs& a) {
   std::vector<std::string> record;
   if (auto r = a.Value("--record")) {
     std::stringstream ss(*r);
     std::string m;
     while (std::getline(ss, m, ',')) {
-      if (m != "camera" && m != "lidar" && m != "radar")
+      if (m != "camera" && m != "lidar" && m != "radar" && m != "mcap")
         throw UsageError("uavsim " + cmd +
-                         ": --record expects a list of camera, lidar, radar; got '" + m + "'");
+                         ": --record expects a list of camera, lidar, radar, mcap; got '" + m +
+                         "'");
       record.push_back(m);
     }
   }

@@ -175,13 +175,12 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
   core::WallProfile profile;
   const std::string started_utc = UtcNow();
   std::optional<results::RunDirectory> dir;
-  std::optional<Recorder> recorder;
-  if (!o.collect) {
-    dir.emplace(o.out_dir, o.force);
-    recorder.emplace(*dir, std::set<std::string>(o.record.begin(), o.record.end()));
-  }
+  if (!o.collect) dir.emplace(o.out_dir, o.force);
 
   WorldModel world(s);
+  std::optional<Recorder> recorder;
+  if (!o.collect)
+    recorder.emplace(*dir, std::set<std::string>(o.record.begin(), o.record.end()), s, world);
   core::Simulator sim;
   const core::SimTime t_end = core::Seconds(s.duration_s);
   TruthSampler truth(s, world, !o.collect);
@@ -210,8 +209,14 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
         const Eigen::Vector3d truth_m = world.target().StateAt(t_s).position_m;
         if (collector) return collector->OnWindow(t_window_end, truth_m);
         const auto estimated = edge.EstimateWindow(tick, t_s);
-        const auto timing = core::WallProfile::Measure(&profile, "beams");
-        scores->Score(t_s, truth_m, estimated, world);
+        std::map<std::string, Eigen::Vector3d> scored;
+        {
+          const auto timing = core::WallProfile::Measure(&profile, "beams");
+          scored = scores->Score(t_s, truth_m, estimated, world);
+        }
+        const auto timing =
+            core::WallProfile::Measure(recorder->records_mcap() ? &profile : nullptr, "record");
+        recorder->RecordWindow(t_s, world, scored);
       });
   window_timer.Start(sim, 0, t_end + 1);  // a deadline at exactly t_end still runs
 
@@ -233,10 +238,11 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
   const auto traffic = TrafficByModality(nodes);
   if (o.collect)
     return Summarize(s, traffic, nullptr, truth.table().rows(), wall_since_start(), profile);
-  FinishedRun run{s, o, {}, started_utc, truth.table(), *scores, edge, world, traffic};
+  FinishedRun run{s, o, {}, started_utc, truth.table(), *scores, edge, world, traffic, nullptr};
   {
     const auto timing = core::WallProfile::Measure(&profile, "write");
-    recorder->Finish();
+    recorder->Finish(edge.receiver().log());
+    run.recording = recorder->McapSummary();
     WriteRunTables(*dir, run);
   }
   run.summary = Summarize(s, traffic, &*scores, truth.table().rows(), wall_since_start(), profile);

@@ -26,7 +26,7 @@ struct RunOptions {
   // gnuplot). Sweeps turn it off for their points: `uavsim report` draws a
   // point's report when wanted.
   bool report = true;
-  std::vector<std::string> record;  // modalities to record: camera, lidar, radar
+  std::vector<std::string> record;  // what to record: camera, lidar, radar, mcap
   std::string scenario_file;        // for the manifest
   // Training-data generation (sim/train.h): when set, every node frame whose
   // pre-processing found something is added to *collect with the truth at
@@ -40,7 +40,8 @@ struct RunSummary {
   double wall_s = 0.0;  // from the start to the run directory's tables written
   // Wall seconds per part of the run, in the order first measured:
   // "setup", "node/<id>/capture", ".../preprocess", ".../record",
-  // ".../encode", "edge/<method>", "beams", "write", and "other" (the rest of
+  // ".../encode", "edge/<method>", "beams", "record" (the windows written to
+  // recording.mcap), "write", and "other" (the rest of
   // wall_s: the event loop, uplinks, truth, and waiting for frames). Nodes
   // that capture on threads of their own overlap the rest, so the parts sum
   // to wall_s or more.

@@ -58,12 +58,24 @@ double EstimateWallSeconds(const Scenario& s) {
 }
 
 double EstimateRecordBytes(const Scenario& s, const std::vector<std::string>& modalities) {
+  const auto wants = [&](const std::string& m) {
+    return std::find(modalities.begin(), modalities.end(), m) != modalities.end();
+  };
+  // recording.mcap: every frame's files base64-encoded in JSON (4/3; zstd
+  // takes some of it back), a window's truth, estimates and errors, an
+  // uplink message's line per frame, and the world's triangles once.
+  const bool mcap = wants("mcap");
+  constexpr double kBase64 = 4.0 / 3.0, kWindowBytes = 2048.0, kPerMethodBytes = 768.0,
+                   kUplinkBytes = 400.0, kWorldBytes = 4e6;
   double bytes = 0.0;
   for (const NodeConfig& n : s.nodes) {
-    if (std::find(modalities.begin(), modalities.end(), n.sensor.modality()) == modalities.end())
-      continue;
     const double frames = std::floor(s.duration_s * n.sensor.timing().rate_hz) + 1.0;
-    bytes += frames * RecordedFrameBytes(n.sensor);
+    if (wants(n.sensor.modality())) bytes += frames * RecordedFrameBytes(n.sensor);
+    if (mcap) bytes += frames * (kBase64 * RecordedFrameBytes(n.sensor) + kUplinkBytes);
+  }
+  if (mcap) {
+    const double windows = std::floor(s.duration_s / s.pipeline.window_s) + 1.0;
+    bytes += kWorldBytes + windows * (kWindowBytes + kPerMethodBytes * s.pipeline.methods.size());
   }
   return bytes;
 }

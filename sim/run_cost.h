@@ -17,8 +17,8 @@ namespace uavsim::sim {
 // Seconds of wall time the run would take here (its set-up included).
 double EstimateWallSeconds(const Scenario& s);
 
-// Bytes `uavsim run --record` of `modalities` ("camera", "lidar", "radar")
-// would write under DIR/frames, at most.
+// Bytes `uavsim run --record` of `modalities` ("camera", "lidar", "radar",
+// "mcap") would write under DIR/frames and in DIR/recording.mcap, at most.
 double EstimateRecordBytes(const Scenario& s, const std::vector<std::string>& modalities);
 
 // Free bytes of the file system that holds `path` (or its nearest existing

@@ -56,6 +56,7 @@ core::Json Metrics(const FinishedRun& run) {
                 {"preprocessed", traffic.preprocessed_bytes / 1000.0 / duration_s},
                 {"compressed", traffic.compressed_bytes / 1000.0 / duration_s}};
   metrics["data_rate_kBps"] = rates;
+  if (!run.recording.is_null()) metrics["recording"] = run.recording;
   metrics["sim_s"] = summary.sim_s;
   metrics["wall_s"] = summary.wall_s;
   metrics["realtime_factor"] = summary.wall_s > 0 ? summary.sim_s / summary.wall_s : 0.0;

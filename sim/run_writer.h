@@ -28,6 +28,7 @@ struct FinishedRun {
   const EdgeServer& edge;
   const WorldModel& world;
   std::map<std::string, NodeTraffic> traffic;  // per modality: camera, lidar, radar
+  core::Json recording = nullptr;  // recording.mcap's counts (McapRecorder::Summary), if recorded
 };
 
 // Writes the run's tables into `dir`'s staging folder: truth.csv,

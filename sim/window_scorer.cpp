@@ -49,9 +49,9 @@ void WindowScorer::FindBounds(const WorldModel& world) {
   bounded_ = true;
 }
 
-void WindowScorer::Score(double t_s, const Eigen::Vector3d& truth_m,
-                         const std::map<std::string, Eigen::Vector3d>& raw_estimates,
-                         WorldModel& world) {
+std::map<std::string, Eigen::Vector3d> WindowScorer::Score(
+    double t_s, const Eigen::Vector3d& truth_m,
+    const std::map<std::string, Eigen::Vector3d>& raw_estimates, WorldModel& world) {
   if (!bounded_) FindBounds(world);
   ++windows_;
   std::map<std::string, Eigen::Vector3d> estimated;
@@ -81,6 +81,7 @@ void WindowScorer::Score(double t_s, const Eigen::Vector3d& truth_m,
     downlink_common_.AddWindow(truth_m, steering, world);
     ++downlink_common_windows_;
   }
+  return estimated;
 }
 
 std::map<std::string, std::uint64_t> WindowScorer::rejected() const {

@@ -43,8 +43,10 @@ class WindowScorer {
   // downlink's blockage and reflections. An estimate that is not finite,
   // or lies more than 1 km outside the box of the nodes, the base station
   // and the target's whole path, counts as no estimate (rejected()).
-  void Score(double t_s, const Eigen::Vector3d& truth_m,
-             const std::map<std::string, Eigen::Vector3d>& estimated, WorldModel& world);
+  // Returns the estimates scored (those not rejected).
+  std::map<std::string, Eigen::Vector3d> Score(
+      double t_s, const Eigen::Vector3d& truth_m,
+      const std::map<std::string, Eigen::Vector3d>& estimated, WorldModel& world);
 
   std::uint64_t windows() const { return windows_; }
   const results::CsvTable& estimates() const { return estimates_; }
