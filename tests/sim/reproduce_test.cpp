@@ -65,8 +65,11 @@ std::size_t FinishedTrainings(const std::string& dir) {
   std::size_t n = 0;
   std::error_code ec;
   if (!fs::is_directory(dir + "/models", ec)) return 0;
+  // A folder whose name starts with '.' is a staging folder: a killed
+  // invocation leaves it and the next one removes it, so it is not finished.
   for (const auto& e : fs::directory_iterator(dir + "/models", ec))
-    n += fs::is_regular_file(e.path() / "training_report.json");
+    n += e.path().filename().string()[0] != '.' &&
+         fs::is_regular_file(e.path() / "training_report.json");
   return n;
 }
 
