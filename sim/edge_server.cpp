@@ -79,6 +79,8 @@ core::Json ExtensionsOf(const pipeline::ModelManifest& m) {
     ext.push_back(std::string("point_frame=") + pipeline::PointFrameName(t.point_frame));
   if (t.point_norm != pipeline::PointNorm::kBatch)
     ext.push_back(std::string("point_norm=") + pipeline::PointNormName(t.point_norm));
+  if (t.ib_mse_units != pipeline::IbMseUnits::kMetres)
+    ext.push_back(std::string("ib_mse_units=") + pipeline::IbMseUnitsName(t.ib_mse_units));
   return ext;
 }
 

@@ -195,6 +195,7 @@ const char* kTrainHelp =
     "                 camera_stereo_branches (shared|two)\n"
     "                 camera_eye_pool_side camera_roi_geometry\n"
     "                 point_frame (scene|centroid) point_norm (batch|group|none)\n"
+    "                 ib_mse_units (metres|normalised)\n"
     "                 selection_weight\n"
     "                 selection_radius_m filter_preference_m offset_calibration_radius_m\n"
     "                 position_loss (mixture|mean) alignment (te_align|first|middle|random)\n"
@@ -723,6 +724,11 @@ int Train(int argc, char** argv) {
             "obs.)\n",
             modality.c_str(), d.on_target_rmse_m, d.on_target, d.centroid_on_target_m,
             d.off_target_rmse_m, d.off_target);
+      std::printf("validation on target (what stage-1 settings are chosen on):");
+      for (const auto& [modality, d] : r.validation_decoder)
+        std::printf(" %s %.3f vs centroid %.3f (%zu obs.)", modality.c_str(), d.on_target_rmse_m,
+                    d.centroid_on_target_m, d.on_target);
+      std::printf("\n");
       std::printf("held-out observations holding the target (of those sent):");
       for (const auto& [modality, weathers] : r.test_sent)
         for (const auto& [weather, c] : weathers)

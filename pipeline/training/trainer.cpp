@@ -244,6 +244,7 @@ IbCcModel TrainEncoder(Modality m, const Dataset& data, const TrainOptions& o,
   config.latent_dim = o.latent_dim;
   config.dropout = o.dropout;
   config.beta = o.beta;
+  config.mse_units = o.ib_mse_units;
   config.bottleneck = o.bottleneck;
   config.normalization = norm;
   config.stereo_branches = o.camera_stereo_branches;
@@ -742,6 +743,7 @@ std::vector<IbCcModel> LoadEncoders(const std::string& model_path, int latent_di
 void CopyStage1Keys(const TrainingConfig& from, TrainingConfig& to) {
   to.dropout = from.dropout;
   to.beta = from.beta;
+  to.ib_mse_units = from.ib_mse_units;
   to.stage1_lr = from.stage1_lr;
   to.stage1_batch = from.stage1_batch;
   to.stage1_max_epochs = from.stage1_max_epochs;
@@ -982,6 +984,8 @@ TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& o, const ModelM
   }
 
   if (!data.test.empty()) report.test_decoder = DecoderScores(encoders, data.test, align);
+  if (!data.validation.empty())
+    report.validation_decoder = DecoderScores(encoders, data.validation, align);
   for (const Episode& e : data.test)
     for (const Sample& smp : e.samples)
       for (const std::string& w : {std::string("all"), WeatherOf(e)}) {
@@ -1048,6 +1052,26 @@ std::map<std::string, DecoderScore> EvaluateDecoders(const std::string& model_pa
   return DecoderScores(encoders, episodes, TeAlign(windows));
 }
 
+namespace {
+
+// TrainReport::test_decoder / validation_decoder as JSON, by modality name.
+core::Json DecoderScoresJson(const std::map<std::string, DecoderScore>& scores) {
+  const auto number = [](double v) {
+    return std::isfinite(v) ? core::Json(v) : core::Json(nullptr);
+  };
+  core::Json decoder = core::Json::object();
+  for (const auto& [modality, d] : scores)
+    decoder[modality] = {
+        {"rmse_m", number(d.rmse_m)},
+        {"observations", d.observations},
+        {"on_target", {{"rmse_m", number(d.on_target_rmse_m)}, {"observations", d.on_target}}},
+        {"off_target", {{"rmse_m", number(d.off_target_rmse_m)}, {"observations", d.off_target}}},
+        {"centroid_on_target_m", number(d.centroid_on_target_m)}};
+  return decoder;
+}
+
+}  // namespace
+
 std::string ReportJson(const TrainReport& r, const TrainOptions& o) {
   core::Json j = core::Json::object();
   j["seed"] = o.seed;
@@ -1093,18 +1117,8 @@ std::string ReportJson(const TrainReport& r, const TrainOptions& o) {
   core::Json test = core::Json::object();
   for (const auto& [method, ev] : r.test) test[method] = EvaluationJson(ev);
   j["test"] = test;
-  core::Json decoder = core::Json::object();
-  const auto number = [](double v) {
-    return std::isfinite(v) ? core::Json(v) : core::Json(nullptr);
-  };
-  for (const auto& [modality, d] : r.test_decoder)
-    decoder[modality] = {
-        {"rmse_m", number(d.rmse_m)},
-        {"observations", d.observations},
-        {"on_target", {{"rmse_m", number(d.on_target_rmse_m)}, {"observations", d.on_target}}},
-        {"off_target", {{"rmse_m", number(d.off_target_rmse_m)}, {"observations", d.off_target}}},
-        {"centroid_on_target_m", number(d.centroid_on_target_m)}};
-  j["test_decoder"] = decoder;
+  j["test_decoder"] = DecoderScoresJson(r.test_decoder);
+  j["validation_decoder"] = DecoderScoresJson(r.validation_decoder);
   core::Json sent = core::Json::object();
   for (const auto& [modality, weathers] : r.test_sent)
     for (const auto& [weather, c] : weathers)

@@ -53,6 +53,7 @@ TrainingConfig AllChanged() {
   c.camera_roi_geometry = false;
   c.point_frame = PointFrame::kCentroid;
   c.point_norm = PointNorm::kGroup;
+  c.ib_mse_units = IbMseUnits::kNormalised;
   c.selection_weight = 0.5;
   c.selection_radius_m = 1.5;
   c.filter_preference_m = 0.0;
@@ -211,6 +212,16 @@ TEST_CASE("ModelManifest: records the training config, and reads models without 
   WriteModelManifest(old, dir + "/old.json");
   CHECK_FALSE(Json::parse(testing::ReadFile(dir + "/old.json")).contains("training"));
   CHECK_FALSE(ReadModelManifest(dir + "/old.json").training.has_value());
+  // A block written before a key existed reads that key as what such models
+  // were trained with, not as today's default: ib_mse_units "normalised".
+  Json earlier = TrainingConfigJson(TrainingConfig{});
+  earlier.erase("ib_mse_units");
+  testing::WriteFile(dir + "/earlier.json",
+                     Json{{"format", "uavsim-model/1"}, {"training", earlier}}.dump(2));
+  const ModelManifest earlier_back = ReadModelManifest(dir + "/earlier.json");
+  REQUIRE(earlier_back.training.has_value());
+  CHECK(earlier_back.training->ib_mse_units == IbMseUnits::kNormalised);
+  CHECK(TrainingConfig{}.ib_mse_units == IbMseUnits::kMetres);
   // The shipped model was trained with the defaults but for the two keys its
   // command sets (README: point_frame centroid, stage 1 up to 100 epochs),
   // and says so.
