@@ -120,6 +120,18 @@ void RunEpochs(torch::nn::Module& model, int max_epochs, int patience, const std
   report.best_validation_loss = stopping.best;
 }
 
+// RunEpochs' epochs_since_best: halves Adam's step after `plateau_epochs`
+// epochs without a better validation loss, counted from the last cut (0: never).
+std::function<void(int)> HalveOnPlateau(torch::optim::Adam& adam, double lr, int plateau_epochs) {
+  return [&adam, lr, plateau_epochs, since_cut = 0](int since_best) mutable {
+    if (plateau_epochs <= 0 || std::min(since_best, ++since_cut) < plateau_epochs) return;
+    lr *= 0.5;
+    since_cut = 0;
+    for (auto& group : adam.param_groups())
+      static_cast<torch::optim::AdamOptions&>(group.options()).lr(lr);
+  };
+}
+
 // ---- What an observation holds (DecoderScore) ----
 
 constexpr double kLidarHoldsTargetM = 1.0, kRadarHoldsTargetM = 3.0, kCameraHoldsTargetM = 1.0;
@@ -313,7 +325,7 @@ IbCcModel TrainEncoder(Modality m, const Dataset& data, const TrainOptions& o,
       [&](int epoch) {
         SaveIbCcModel(model, checkpoint, "checkpoint: epoch " + std::to_string(epoch));
       },
-      report);
+      report, HalveOnPlateau(adam, o.stage1_lr, o.stage1_plateau_epochs));
   report.seconds = SecondsSince(start);
   return model;
 }
@@ -595,17 +607,7 @@ UavLocModel TrainFusion(const std::vector<WindowSequence>& train,
       },
       [&] { return FusionValidationLoss(model, val); },
       [&](int) { SaveUavLocModel(model, checkpoint); }, report,
-      [&, lr = o.stage2_lr, since_cut = 0](int since_best) mutable {
-        // Halve the learning rate after stage2_plateau_epochs without a
-        // better validation loss (counted from the last cut).
-        if (o.stage2_plateau_epochs <= 0 ||
-            std::min(since_best, ++since_cut) < o.stage2_plateau_epochs)
-          return;
-        lr *= 0.5;
-        since_cut = 0;
-        for (auto& group : adam.param_groups())
-          static_cast<torch::optim::AdamOptions&>(group.options()).lr(lr);
-      });
+      HalveOnPlateau(adam, o.stage2_lr, o.stage2_plateau_epochs));
   report.seconds = SecondsSince(start);
   return model;
 }
@@ -748,6 +750,7 @@ void CopyStage1Keys(const TrainingConfig& from, TrainingConfig& to) {
   to.stage1_batch = from.stage1_batch;
   to.stage1_max_epochs = from.stage1_max_epochs;
   to.stage1_patience = from.stage1_patience;
+  to.stage1_plateau_epochs = from.stage1_plateau_epochs;
   to.stage1_min_samples_per_epoch = from.stage1_min_samples_per_epoch;
   to.stage1_max_samples_per_epoch = from.stage1_max_samples_per_epoch;
   to.stage1_max_validation_samples = from.stage1_max_validation_samples;

@@ -11,6 +11,7 @@ void Visit(V& v, TrainingConfig& c) {
   v("stage1_batch", c.stage1_batch, Rule::Range(2, 1 << 16));
   v("stage1_max_epochs", c.stage1_max_epochs, Rule::NonNegative(1e6));
   v("stage1_patience", c.stage1_patience, Rule::Range(1, 1e6));
+  v("stage1_plateau_epochs", c.stage1_plateau_epochs, Rule::NonNegative(1e4));
   v("stage1_min_samples_per_epoch", c.stage1_min_samples_per_epoch, Rule::Range(2, 1e9));
   v("stage1_max_samples_per_epoch", c.stage1_max_samples_per_epoch, Rule::Range(2, 1e9));
   v.Check(c.stage1_max_samples_per_epoch >= c.stage1_min_samples_per_epoch,

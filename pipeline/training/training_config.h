@@ -36,6 +36,9 @@ struct TrainingConfig {
   int stage1_batch = 32;
   int stage1_max_epochs = 30;
   int stage1_patience = 6;
+  // Halve the stage-1 step after this many epochs without a better
+  // validation loss, counted from the last cut (0: never), as stage 2 does.
+  int stage1_plateau_epochs = 0;
   int stage1_min_samples_per_epoch = 640;    // small data sets are cycled ...
   int stage1_max_samples_per_epoch = 3000;   // ... large ones sampled
   int stage1_max_validation_samples = 1024;  // evenly spaced over the validation episodes
