@@ -57,7 +57,7 @@ void Visit(V& v, ModelManifest& c) {
   v.Check(c.variant == "paper" || c.anchored_edge.empty(), "anchored_edge",
           "only the paper variant has the anchored head, this model is \"" + c.variant + "\"");
   if constexpr (V::kReading) {
-    if (v.Has("training")) v.Object("training", c.training.emplace());
+    if (v.Has("training")) v.Object("training", c.training.emplace(EarlierModelsTrainingConfig()));
   } else if (c.training) {
     v.Object("training", *c.training);
   }

@@ -79,6 +79,13 @@ core::Json ExtensionsOf(const pipeline::ModelManifest& m) {
     ext.push_back(std::string("point_frame=") + pipeline::PointFrameName(t.point_frame));
   if (t.point_norm != pipeline::PointNorm::kBatch)
     ext.push_back(std::string("point_norm=") + pipeline::PointNormName(t.point_norm));
+  if (t.ib_mse_units != pipeline::IbMseUnits::kMetres)
+    ext.push_back(std::string("ib_mse_units=") + pipeline::IbMseUnitsName(t.ib_mse_units));
+  // Stage 1 left out observations whose cluster or bearing missed the truth.
+  if (t.stage1_label_gate_m > 0.0)
+    ext.push_back("stage1_label_gate_m=" + core::FormatNumber(t.stage1_label_gate_m));
+  if (t.stage1_label_gate_deg > 0.0)
+    ext.push_back("stage1_label_gate_deg=" + core::FormatNumber(t.stage1_label_gate_deg));
   return ext;
 }
 

@@ -110,7 +110,7 @@ const char* kRunHelp =
     "  --duration S    override duration_s (same as --set /duration_s=S)\n"
     "  --record LIST   record raw frames of these modalities under DIR/frames/; mcap:\n"
     "                  DIR/recording.mcap, every sensor, the world, truth, estimates and\n"
-    "                  uplink in one file for Foxglove (README: \"Recordings in Foxglove\")\n"
+    "                  uplink in one file for Foxglove (docs/recordings.md)\n"
     "  --set P=V       override the value at JSON pointer P\n"
     "  --force         replace DIR if it exists\n"
     "  --quiet         no progress or summary output\n"
@@ -185,6 +185,7 @@ const char* kTrainHelp =
     "                 valid); scenarios/training/default.json spells out all of them and\n"
     "                 scenarios/training/README.md says what each does:\n"
     "                 dropout beta stage1_lr stage1_batch stage1_max_epochs stage1_patience\n"
+    "                 stage1_plateau_epochs\n"
     "                 stage1_min_samples_per_epoch stage1_max_samples_per_epoch\n"
     "                 stage1_max_validation_samples stage1_label_gate_m\n"
     "                 stage1_label_gate_deg stage2_lr stage2_batch stage2_sequence_windows\n"
@@ -195,6 +196,7 @@ const char* kTrainHelp =
     "                 camera_stereo_branches (shared|two)\n"
     "                 camera_eye_pool_side camera_roi_geometry\n"
     "                 point_frame (scene|centroid) point_norm (batch|group|none)\n"
+    "                 ib_mse_units (metres|normalised)\n"
     "                 selection_weight\n"
     "                 selection_radius_m filter_preference_m offset_calibration_radius_m\n"
     "                 position_loss (mixture|mean) alignment (te_align|first|middle|random)\n"
@@ -723,6 +725,11 @@ int Train(int argc, char** argv) {
             "obs.)\n",
             modality.c_str(), d.on_target_rmse_m, d.on_target, d.centroid_on_target_m,
             d.off_target_rmse_m, d.off_target);
+      std::printf("validation on target (what stage-1 settings are chosen on):");
+      for (const auto& [modality, d] : r.validation_decoder)
+        std::printf(" %s %.3f vs centroid %.3f (%zu obs.)", modality.c_str(), d.on_target_rmse_m,
+                    d.centroid_on_target_m, d.on_target);
+      std::printf("\n");
       std::printf("held-out observations holding the target (of those sent):");
       for (const auto& [modality, weathers] : r.test_sent)
         for (const auto& [weather, c] : weathers)

@@ -53,7 +53,7 @@ struct TeAlignConfig {
   double time_unit_s = 1e-3;
   // The paper's τ is the frame's time stamp (kClock); ours its offset into the
   // window (kWindow), so a window's encoding does not depend on how long the
-  // run has gone (measured: README, "The paper's design and ours").
+  // run has gone (measured: docs/training.md, "The paper's design and ours").
   TauOrigin tau_origin = TauOrigin::kWindow;
   // TE-Align or a resampling baseline (see Alignment).
   Alignment alignment = Alignment::kTeAlign;

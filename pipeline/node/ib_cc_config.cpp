@@ -20,6 +20,7 @@ void Visit(V& v, IbCcConfig& c) {
   v.Enum("bottleneck", c.bottleneck, {{"ib", IbBottleneck::kIb}, {"mlp", IbBottleneck::kMlp}});
   v("dropout", c.dropout, Rule{0.0, 1.0, false, true});
   v("beta", c.beta, Rule::NonNegative());
+  v.Enum("mse_units", c.mse_units, IbMseUnitsNames());
   v.Object("normalization", c.normalization);
   v.Enum("stereo_branches", c.stereo_branches,
          {{"shared", StereoBranches::kShared}, {"two", StereoBranches::kTwo}});
@@ -41,6 +42,18 @@ const std::vector<std::pair<const char*, PointNorm>>& PointNormNames() {
   static const std::vector<std::pair<const char*, PointNorm>> names = {
       {"batch", PointNorm::kBatch}, {"group", PointNorm::kGroup}, {"none", PointNorm::kNone}};
   return names;
+}
+
+const std::vector<std::pair<const char*, IbMseUnits>>& IbMseUnitsNames() {
+  static const std::vector<std::pair<const char*, IbMseUnits>> names = {
+      {"metres", IbMseUnits::kMetres}, {"normalised", IbMseUnits::kNormalised}};
+  return names;
+}
+
+const char* IbMseUnitsName(IbMseUnits u) {
+  for (const auto& [name, value] : IbMseUnitsNames())
+    if (value == u) return name;
+  return "?";
 }
 
 const char* PointFrameName(PointFrame f) {

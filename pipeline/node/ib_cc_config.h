@@ -38,12 +38,26 @@ enum class PointNorm {
   kNone,   // none; the convolutions get a bias (ours)
 };
 
+// The units of L_MSE in L = L_MSE + beta D_KL (IbCcModelImpl::Loss). The
+// network's positions are normalised (ib_normalization.h); the units decide
+// how much beta weighs: a latent coordinate whose noise sigma costs sigma^2
+// of L_MSE and about -beta log sigma of D_KL settles at sigma^2 = beta / 2,
+// i.e. sqrt(beta / 2) m per axis in metres, sqrt(beta / 2) * scale_m in
+// normalised units.
+enum class IbMseUnits {
+  kMetres,      // the position's squared error in m^2 (the paper's equation with y in metres)
+  kNormalised,  // in units of the scene's scale_m (ours: beta weighs scale_m^2 more)
+};
+
 struct IbCcConfig {
   Modality modality = Modality::kCamera;  // camera: image encoder; lidar/radar: PointNet
   int latent_dim = 16;                    // paper: z in {4, 8, 16, 32, 64}
   IbBottleneck bottleneck = IbBottleneck::kIb;
   double dropout = 0.1;  // paper Sec. VI
   double beta = 1e-3;    // paper Sec. VI: IB trade-off in L = MSE + beta KL
+  // Training only; the default is what models trained before the key used
+  // (a sidecar without it loads as before).
+  IbMseUnits mse_units = IbMseUnits::kNormalised;
   IbNormalization normalization;
   // Camera only; the defaults are the layout of models trained before these
   // switches existed (a sidecar without the keys loads as before). The
@@ -63,11 +77,13 @@ struct IbCcConfig {
   PointNorm point_norm = PointNorm::kBatch;
 };
 
-// "scene" / "centroid"; "batch" / "group" / "none".
+// "scene" / "centroid"; "batch" / "group" / "none"; "metres" / "normalised".
 const char* PointFrameName(PointFrame f);
 const char* PointNormName(PointNorm n);
 const std::vector<std::pair<const char*, PointFrame>>& PointFrameNames();
 const std::vector<std::pair<const char*, PointNorm>>& PointNormNames();
+const char* IbMseUnitsName(IbMseUnits u);
+const std::vector<std::pair<const char*, IbMseUnits>>& IbMseUnitsNames();
 
 template <class V>
 void Visit(V& v, IbCcConfig& c);

@@ -440,8 +440,12 @@ IbLoss IbCcModelImpl::Loss(const IbOutput& out, const torch::Tensor& y) const {
   if (!HasShape(y, {out.y_hat.size(0), 3}))
     Fail("IbCcModel::Loss: target", "[" + std::to_string(out.y_hat.size(0)) + ", 3]", y);
   IbLoss loss;
-  // L_MSE = ||y - y_hat||_2^2 (paper), averaged over the batch.
-  loss.mse = (out.y_hat - y).square().sum(1).mean();
+  // L_MSE = ||y - y_hat||_2^2 (paper), averaged over the batch; in m^2 or
+  // in normalised units (IbMseUnits).
+  const double scale = config_.mse_units == IbMseUnits::kMetres
+                           ? config_.normalization.scale_m * config_.normalization.scale_m
+                           : 1.0;
+  loss.mse = (out.y_hat - y).square().sum(1).mean() * scale;
   loss.kl = out.sigma.defined() ? KlDivergence(out.mu, out.sigma).mean()
                                 : torch::zeros({}, out.y_hat.options());
   // L_ALL = L_MSE + beta * D_KL (paper eq. for L_ALL).

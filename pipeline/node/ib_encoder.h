@@ -207,7 +207,8 @@ struct IbOutput {
 };
 
 // L = L_MSE + beta * D_KL (paper eq. for L_ALL), each a batch mean; L_MSE =
-// ||y - y_hat||^2 summed over x, y, z. kl is 0 for the MLP baseline.
+// ||y - y_hat||^2 summed over x, y, z, in m^2 or normalised units
+// (IbCcConfig::mse_units). kl is 0 for the MLP baseline.
 struct IbLoss {
   torch::Tensor total, mse, kl;
 };

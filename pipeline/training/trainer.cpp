@@ -120,6 +120,18 @@ void RunEpochs(torch::nn::Module& model, int max_epochs, int patience, const std
   report.best_validation_loss = stopping.best;
 }
 
+// RunEpochs' epochs_since_best: halves Adam's step after `plateau_epochs`
+// epochs without a better validation loss, counted from the last cut (0: never).
+std::function<void(int)> HalveOnPlateau(torch::optim::Adam& adam, double lr, int plateau_epochs) {
+  return [&adam, lr, plateau_epochs, since_cut = 0](int since_best) mutable {
+    if (plateau_epochs <= 0 || std::min(since_best, ++since_cut) < plateau_epochs) return;
+    lr *= 0.5;
+    since_cut = 0;
+    for (auto& group : adam.param_groups())
+      static_cast<torch::optim::AdamOptions&>(group.options()).lr(lr);
+  };
+}
+
 // ---- What an observation holds (DecoderScore) ----
 
 constexpr double kLidarHoldsTargetM = 1.0, kRadarHoldsTargetM = 3.0, kCameraHoldsTargetM = 1.0;
@@ -244,6 +256,7 @@ IbCcModel TrainEncoder(Modality m, const Dataset& data, const TrainOptions& o,
   config.latent_dim = o.latent_dim;
   config.dropout = o.dropout;
   config.beta = o.beta;
+  config.mse_units = o.ib_mse_units;
   config.bottleneck = o.bottleneck;
   config.normalization = norm;
   config.stereo_branches = o.camera_stereo_branches;
@@ -312,7 +325,7 @@ IbCcModel TrainEncoder(Modality m, const Dataset& data, const TrainOptions& o,
       [&](int epoch) {
         SaveIbCcModel(model, checkpoint, "checkpoint: epoch " + std::to_string(epoch));
       },
-      report);
+      report, HalveOnPlateau(adam, o.stage1_lr, o.stage1_plateau_epochs));
   report.seconds = SecondsSince(start);
   return model;
 }
@@ -594,17 +607,7 @@ UavLocModel TrainFusion(const std::vector<WindowSequence>& train,
       },
       [&] { return FusionValidationLoss(model, val); },
       [&](int) { SaveUavLocModel(model, checkpoint); }, report,
-      [&, lr = o.stage2_lr, since_cut = 0](int since_best) mutable {
-        // Halve the learning rate after stage2_plateau_epochs without a
-        // better validation loss (counted from the last cut).
-        if (o.stage2_plateau_epochs <= 0 ||
-            std::min(since_best, ++since_cut) < o.stage2_plateau_epochs)
-          return;
-        lr *= 0.5;
-        since_cut = 0;
-        for (auto& group : adam.param_groups())
-          static_cast<torch::optim::AdamOptions&>(group.options()).lr(lr);
-      });
+      HalveOnPlateau(adam, o.stage2_lr, o.stage2_plateau_epochs));
   report.seconds = SecondsSince(start);
   return model;
 }
@@ -742,10 +745,12 @@ std::vector<IbCcModel> LoadEncoders(const std::string& model_path, int latent_di
 void CopyStage1Keys(const TrainingConfig& from, TrainingConfig& to) {
   to.dropout = from.dropout;
   to.beta = from.beta;
+  to.ib_mse_units = from.ib_mse_units;
   to.stage1_lr = from.stage1_lr;
   to.stage1_batch = from.stage1_batch;
   to.stage1_max_epochs = from.stage1_max_epochs;
   to.stage1_patience = from.stage1_patience;
+  to.stage1_plateau_epochs = from.stage1_plateau_epochs;
   to.stage1_min_samples_per_epoch = from.stage1_min_samples_per_epoch;
   to.stage1_max_samples_per_epoch = from.stage1_max_samples_per_epoch;
   to.stage1_max_validation_samples = from.stage1_max_validation_samples;
@@ -982,6 +987,8 @@ TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& o, const ModelM
   }
 
   if (!data.test.empty()) report.test_decoder = DecoderScores(encoders, data.test, align);
+  if (!data.validation.empty())
+    report.validation_decoder = DecoderScores(encoders, data.validation, align);
   for (const Episode& e : data.test)
     for (const Sample& smp : e.samples)
       for (const std::string& w : {std::string("all"), WeatherOf(e)}) {
@@ -1048,6 +1055,26 @@ std::map<std::string, DecoderScore> EvaluateDecoders(const std::string& model_pa
   return DecoderScores(encoders, episodes, TeAlign(windows));
 }
 
+namespace {
+
+// TrainReport::test_decoder / validation_decoder as JSON, by modality name.
+core::Json DecoderScoresJson(const std::map<std::string, DecoderScore>& scores) {
+  const auto number = [](double v) {
+    return std::isfinite(v) ? core::Json(v) : core::Json(nullptr);
+  };
+  core::Json decoder = core::Json::object();
+  for (const auto& [modality, d] : scores)
+    decoder[modality] = {
+        {"rmse_m", number(d.rmse_m)},
+        {"observations", d.observations},
+        {"on_target", {{"rmse_m", number(d.on_target_rmse_m)}, {"observations", d.on_target}}},
+        {"off_target", {{"rmse_m", number(d.off_target_rmse_m)}, {"observations", d.off_target}}},
+        {"centroid_on_target_m", number(d.centroid_on_target_m)}};
+  return decoder;
+}
+
+}  // namespace
+
 std::string ReportJson(const TrainReport& r, const TrainOptions& o) {
   core::Json j = core::Json::object();
   j["seed"] = o.seed;
@@ -1093,18 +1120,8 @@ std::string ReportJson(const TrainReport& r, const TrainOptions& o) {
   core::Json test = core::Json::object();
   for (const auto& [method, ev] : r.test) test[method] = EvaluationJson(ev);
   j["test"] = test;
-  core::Json decoder = core::Json::object();
-  const auto number = [](double v) {
-    return std::isfinite(v) ? core::Json(v) : core::Json(nullptr);
-  };
-  for (const auto& [modality, d] : r.test_decoder)
-    decoder[modality] = {
-        {"rmse_m", number(d.rmse_m)},
-        {"observations", d.observations},
-        {"on_target", {{"rmse_m", number(d.on_target_rmse_m)}, {"observations", d.on_target}}},
-        {"off_target", {{"rmse_m", number(d.off_target_rmse_m)}, {"observations", d.off_target}}},
-        {"centroid_on_target_m", number(d.centroid_on_target_m)}};
-  j["test_decoder"] = decoder;
+  j["test_decoder"] = DecoderScoresJson(r.test_decoder);
+  j["validation_decoder"] = DecoderScoresJson(r.validation_decoder);
   core::Json sent = core::Json::object();
   for (const auto& [modality, weathers] : r.test_sent)
     for (const auto& [weather, c] : weathers)

@@ -162,6 +162,9 @@ struct TrainReport {
   // the capture, over the observations of that modality in scored windows
   // (sent on time or not: it is the node's own estimate); by modality name.
   std::map<std::string, DecoderScore> test_decoder;
+  // The same on the validation episodes: what stage-1 settings are chosen
+  // on (the test episodes' figures are reported, never chosen on).
+  std::map<std::string, DecoderScore> validation_decoder;
   // What the nodes sent on the held-out flights, by modality and weather
   // ("all" and WeatherOf's names): observations, and those holding the
   // target (ObservationHoldsTarget).

@@ -11,6 +11,7 @@ void Visit(V& v, TrainingConfig& c) {
   v("stage1_batch", c.stage1_batch, Rule::Range(2, 1 << 16));
   v("stage1_max_epochs", c.stage1_max_epochs, Rule::NonNegative(1e6));
   v("stage1_patience", c.stage1_patience, Rule::Range(1, 1e6));
+  v("stage1_plateau_epochs", c.stage1_plateau_epochs, Rule::NonNegative(1e4));
   v("stage1_min_samples_per_epoch", c.stage1_min_samples_per_epoch, Rule::Range(2, 1e9));
   v("stage1_max_samples_per_epoch", c.stage1_max_samples_per_epoch, Rule::Range(2, 1e9));
   v.Check(c.stage1_max_samples_per_epoch >= c.stage1_min_samples_per_epoch,
@@ -54,6 +55,7 @@ void Visit(V& v, TrainingConfig& c) {
   v("camera_roi_geometry", c.camera_roi_geometry);
   v.Enum("point_frame", c.point_frame, PointFrameNames());
   v.Enum("point_norm", c.point_norm, PointNormNames());
+  v.Enum("ib_mse_units", c.ib_mse_units, IbMseUnitsNames());
   v("selection_weight", c.selection_weight, Rule::NonNegative(100));
   v("selection_radius_m", c.selection_radius_m, Rule::Positive(1e4));
   v("filter_preference_m", c.filter_preference_m, Rule::NonNegative(100));
@@ -62,6 +64,12 @@ void Visit(V& v, TrainingConfig& c) {
          std::vector<std::pair<const char*, bool>>{{"mixture", true}, {"mean", false}});
 }
 UAVSIM_INSTANTIATE_VISIT(TrainingConfig);
+
+TrainingConfig EarlierModelsTrainingConfig() {
+  TrainingConfig c;
+  c.ib_mse_units = IbMseUnits::kNormalised;
+  return c;
+}
 
 TrainingConfig TrainingConfigFromJson(const core::Json& doc, const std::string& file,
                                       TrainingConfig defaults) {

@@ -25,11 +25,20 @@ namespace uavsim::pipeline {
 struct TrainingConfig {
   double dropout = 0.1;  // of the IB-CC models; paper Sec. VI
   double beta = 1e-3;    // paper Sec. VI: IB weight of the KL term
+  // The units of the IB-CC loss's L_MSE (IbMseUnits): m^2, the paper's
+  // equation with the position in metres, or the scene's normalised units
+  // (ours, what models trained before the key used: beta then weighs
+  // scale_m^2, ~190 times, more and caps a decoder's precision at
+  // ~sqrt(3 beta / 2) scale_m, 0.53 m at the default city's 13.8 m scale).
+  IbMseUnits ib_mse_units = IbMseUnits::kMetres;
   // Stage 1 (per modality).
   double stage1_lr = 1e-3;  // Adam
   int stage1_batch = 32;
   int stage1_max_epochs = 30;
   int stage1_patience = 6;
+  // Halve the stage-1 step after this many epochs without a better
+  // validation loss, counted from the last cut (0: never), as stage 2 does.
+  int stage1_plateau_epochs = 0;
   int stage1_min_samples_per_epoch = 640;    // small data sets are cycled ...
   int stage1_max_samples_per_epoch = 3000;   // ... large ones sampled
   int stage1_max_validation_samples = 1024;  // evenly spaced over the validation episodes
@@ -121,9 +130,15 @@ struct TrainingConfig {
   bool mixture_loss = true;
 };
 
+// The keys a model manifest's "training" lacks if it was written before
+// they existed read as what such a model was trained with, not as today's
+// defaults: ib_mse_units "normalised".
+TrainingConfig EarlierModelsTrainingConfig();
+
 // The JSON keys are the field names, except mixture_loss ("position_loss":
 // "mixture" | "mean"); camera_stereo_branches is "shared" | "two"; temporal "mamba" | "gru" |
 // "lstm" | "tcn"; point_frame "scene" | "centroid"; point_norm "batch" | "group" | "none";
+// ib_mse_units "metres" | "normalised";
 // alignment "te_align" | "first" | "middle" | "random"; fusion "uavloc" |
 // "early" | "late" | "hemis" (a fusion baseline needs madw and mica true). Each rule is checked
 // when reading.

@@ -6,7 +6,7 @@
 // pre-processing). Its model folder records the name (model.json
 // "variant"); in the loop it runs as the method of that name (VariantMethod).
 //
-// The names are a contract (README): paper (the default), gru, lstm, tcn,
+// The names are a contract (docs/training.md, docs/variants.md): paper (the default), gru, lstm, tcn,
 // te_align, resample_first, resample_middle, resample_random, no_madw,
 // no_mica, no_madw_mica, early_fusion, late_fusion, modality_dropout, hemis,
 // mlp_bottleneck, raw, raw_camera, raw_lidar_radar, raw_gru, raw_lstm,
@@ -24,7 +24,7 @@ namespace uavsim::pipeline {
 struct Variant {
   const char* name;
   const char* figure;       // the paper's artefact it belongs to
-  const char* description;  // one line for --help and the README
+  const char* description;  // one line for --help and docs/training.md
   const char* config;       // JSON object of TrainingConfig keys it sets
   bool mlp_bottleneck;      // the nodes compress with the MLP baseline
   // The modalities whose nodes encode raw (not pre-processed) data: bit m

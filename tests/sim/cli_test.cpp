@@ -423,11 +423,14 @@ TEST_CASE("CLI: the MMAUD twin runs end to end, its two LiDARs as two nodes of o
         Approx(2 * 1280 * 960 * 30 / 1000.0));
   CHECK(metrics["uavloc_model"]["same_layout"] == true);
   CHECK(metrics["uavloc_model"]["trained_for"] == "mmaud_twin");
-  // Trained with our defaults: the camera encoder's three extensions and
-  // TE-Align's window origin, each named (the paper's preset has none).
+  // Trained with our defaults of its time: the camera encoder's three
+  // extensions, TE-Align's window origin and the IB-CC loss in normalised
+  // units (its manifest predates the key), each named (the paper's preset
+  // has none).
   CHECK(metrics["uavloc_model"]["extensions"] ==
         Json::array({"camera_stereo_branches=shared", "camera_eye_pool_side=4",
-                     "camera_roi_geometry=true", "te_align_tau_origin=window"}));
+                     "camera_roi_geometry=true", "te_align_tau_origin=window",
+                     "ib_mse_units=normalised"}));
   // Each LiDAR node sends its own messages, numbered on its own.
   const std::string packets = ReadFile(out + "/packets.csv");
   for (const char* node : {"avia", "mid360"}) {

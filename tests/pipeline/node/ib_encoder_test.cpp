@@ -450,6 +450,15 @@ TEST_CASE("IbCcModel: loss is MSE + beta KL and gradients reach every parameter"
     const double kl = KlDivergence(out.mu, out.sigma).mean().item<double>();
     CHECK(loss.mse.item<double>() == Approx(mse));
     CHECK(loss.total.item<double>() == Approx(mse + 1e-3 * kl));
+    // In metres (the paper's equation with y in m): the normalised squared
+    // error times scale_m^2, the same KL.
+    IbCcConfig metres = model->config();
+    metres.mse_units = IbMseUnits::kMetres;
+    metres.normalization.scale_m = 13.5;
+    IbCcModel in_metres(metres);
+    const IbLoss m_loss = in_metres->Loss(out, y);
+    CHECK(m_loss.mse.item<double>() == Approx(mse * 13.5 * 13.5));
+    CHECK(m_loss.total.item<double>() == Approx(mse * 13.5 * 13.5 + 1e-3 * kl));
     loss.total.backward();
     for (const auto& p : model->named_parameters()) {
       INFO(ModalityName(m) << ": " << p.key());

@@ -29,6 +29,7 @@ TrainingConfig AllChanged() {
   c.stage1_batch = 8;
   c.stage1_max_epochs = 7;
   c.stage1_patience = 2;
+  c.stage1_plateau_epochs = 3;
   c.stage1_min_samples_per_epoch = 100;
   c.stage1_max_samples_per_epoch = 200;
   c.stage1_max_validation_samples = 50;
@@ -53,6 +54,7 @@ TrainingConfig AllChanged() {
   c.camera_roi_geometry = false;
   c.point_frame = PointFrame::kCentroid;
   c.point_norm = PointNorm::kGroup;
+  c.ib_mse_units = IbMseUnits::kNormalised;
   c.selection_weight = 0.5;
   c.selection_radius_m = 1.5;
   c.filter_preference_m = 0.0;
@@ -211,14 +213,29 @@ TEST_CASE("ModelManifest: records the training config, and reads models without 
   WriteModelManifest(old, dir + "/old.json");
   CHECK_FALSE(Json::parse(testing::ReadFile(dir + "/old.json")).contains("training"));
   CHECK_FALSE(ReadModelManifest(dir + "/old.json").training.has_value());
-  // The shipped model was trained with the defaults but for the two keys its
-  // command sets (README: point_frame centroid, stage 1 up to 100 epochs),
-  // and says so.
+  // A block written before a key existed reads that key as what such models
+  // were trained with, not as today's default: ib_mse_units "normalised".
+  Json earlier = TrainingConfigJson(TrainingConfig{});
+  earlier.erase("ib_mse_units");
+  testing::WriteFile(dir + "/earlier.json",
+                     Json{{"format", "uavsim-model/1"}, {"training", earlier}}.dump(2));
+  const ModelManifest earlier_back = ReadModelManifest(dir + "/earlier.json");
+  REQUIRE(earlier_back.training.has_value());
+  CHECK(earlier_back.training->ib_mse_units == IbMseUnits::kNormalised);
+  CHECK(TrainingConfig{}.ib_mse_units == IbMseUnits::kMetres);
+  // The shipped model was trained with the defaults but for the keys its
+  // command sets (docs/methods-and-models.md: point_frame centroid, point_norm
+  // none, the stage-1 label gate at 3 m, stage 1 up to 300 epochs with
+  // patience 20 and the step halved after 5), and says so.
   const ModelManifest shipped = ReadModelManifest(DefaultModelPath());
   REQUIRE(shipped.training.has_value());
   TrainingConfig expected;
   expected.point_frame = PointFrame::kCentroid;
-  expected.stage1_max_epochs = 100;
+  expected.point_norm = PointNorm::kNone;
+  expected.stage1_label_gate_m = 3.0;
+  expected.stage1_max_epochs = 300;
+  expected.stage1_patience = 20;
+  expected.stage1_plateau_epochs = 5;
   CHECK(TrainingConfigJson(*shipped.training).dump() == TrainingConfigJson(expected).dump());
 
   // The block is read as strictly as a config file.
