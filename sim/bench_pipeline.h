@@ -23,8 +23,7 @@ namespace uavsim::sim {
 // (1000 / mean), the target (issue: encode <= 5 ms per frame on one core;
 // edge <= 1 ms per window) and the paper's Raspberry Pi 5 figure (camera
 // 0.02 s, point cloud 0.09 s, for its whole node pipeline: pre-processing
-// and encoder). With `quiet` only the table is written. Takes about 6 s.
-// Returns 0.
+// and encoder). With `quiet` only the table is written. Returns 0.
 int BenchPipeline(bool quiet, std::ostream& out);
 
 }  // namespace uavsim::sim

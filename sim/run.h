@@ -22,9 +22,9 @@ struct RunOptions {
   std::string out_dir;  // final run directory
   bool force = false;   // replace an existing out_dir
   bool quiet = false;   // no progress, no summary
-  // Draw report.html and report/ (results/run_report.h; about 1.5 s of
-  // gnuplot). Sweeps turn it off for their points: `uavsim report` draws a
-  // point's report when wanted.
+  // Draw report.html and report/ (results/run_report.h, by gnuplot). Sweeps
+  // turn it off for their points: `uavsim report` draws a point's report
+  // when wanted.
   bool report = true;
   std::vector<std::string> record;  // what to record: camera, lidar, radar, mcap
   std::string scenario_file;        // for the manifest

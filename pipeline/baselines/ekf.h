@@ -47,13 +47,8 @@
 //   The defaults come from the process-noise sweeps "[tuning]" in
 //   tests/pipeline/baselines/ekf_test.cpp, on simulated training episodes
 //   (8 x 60 s of each trajectory type, seeds 100-107), never on a reported
-//   scenario. CT: ct_accel_fraction 0.01 (q_a = 0.0025 m^2/s^3) and
-//   ct_turn_rate_fraction 0.02 (q_w = 1e-4 rad^2/s^3), within 1 % of the
-//   sweep's best (0.003, 0.005: a flat floor) and less extreme. "imm_ca_ct"
-//   over "imm": orbit 0.172 -> 0.098 m, figure8 0.177 -> 0.171, waypoints
-//   2.02 -> 1.58 (median 1.82 -> 1.39), random 0.239 -> 0.251 (median
-//   0.215 -> 0.190); "imm_ct" loses figure8 (0.28) and random (0.5-0.9 m):
-//   their smooth, changing accelerations need the CA mode.
+//   scenario; what they measured is in NOTES.md (session 5, and session 16's
+//   "moved from headers").
 //   IMM (Blom & Bar-Shalom 1988; pipeline/tracking/imm.h does its mixing,
 //   mode probabilities and combination): mode switches are a continuous-time
 //   Markov chain leaving mode i at rate 1 / sojourn_i (for any other mode alike), so

@@ -28,8 +28,8 @@ struct TrainingConfig {
   // The units of the IB-CC loss's L_MSE (IbMseUnits): m^2, the paper's
   // equation with the position in metres, or the scene's normalised units
   // (ours, what models trained before the key used: beta then weighs
-  // scale_m^2, ~190 times, more and caps a decoder's precision at
-  // ~sqrt(3 beta / 2) scale_m, 0.53 m at the default city's 13.8 m scale).
+  // scale_m^2 more and caps a decoder's precision near
+  // sqrt(3 beta / 2) scale_m).
   IbMseUnits ib_mse_units = IbMseUnits::kMetres;
   // Stage 1 (per modality).
   double stage1_lr = 1e-3;  // Adam
@@ -49,8 +49,8 @@ struct TrainingConfig {
   // to discount them, nor of any evaluation): a point cluster whose centroid
   // lies farther than stage1_label_gate_m from the truth, a camera ROI whose
   // left bearing is off the truth's direction by more than
-  // stage1_label_gate_deg. 0: keep everything (the default: measured worse
-  // fused, NOTES.md).
+  // stage1_label_gate_deg. 0: keep everything (the default; the shipped
+  // model's command sets 3 m, docs/methods-and-models.md).
   double stage1_label_gate_m = 0.0;
   double stage1_label_gate_deg = 0.0;
   // Stage 2.
@@ -60,7 +60,7 @@ struct TrainingConfig {
   int stage2_max_epochs = 150;
   int stage2_patience = 20;
   // Halve the stage-2 learning rate after this many epochs without a better
-  // validation loss (0: never; 6 measured better, NOTES.md).
+  // validation loss (0: never).
   int stage2_plateau_epochs = 6;
   int stage2_min_steps_per_epoch = 20;
   double modality_dropout = 0.2;  // P(a modality is missing for a whole crop)
