@@ -6,11 +6,10 @@
 // pre-processing). Its model folder records the name (model.json
 // "variant"); in the loop it runs as the method of that name (VariantMethod).
 //
-// The names are a contract (docs/training.md, docs/variants.md): paper (the default), gru, lstm, tcn,
-// te_align, resample_first, resample_middle, resample_random, no_madw,
-// no_mica, no_madw_mica, early_fusion, late_fusion, modality_dropout, hemis,
-// mlp_bottleneck, raw, raw_camera, raw_lidar_radar, raw_gru, raw_lstm,
-// raw_tcn. Torch-free header.
+// The names are a contract (docs/training.md, docs/variants.md): paper (the default), gru, lstm,
+// tcn, te_align, resample_first, resample_middle, resample_random, no_madw, no_mica, no_madw_mica,
+// early_fusion, late_fusion, modality_dropout, hemis, mlp_bottleneck, raw, raw_camera,
+// raw_lidar_radar, raw_gru, raw_lstm, raw_tcn. Torch-free header.
 #pragma once
 
 #include <cstdint>

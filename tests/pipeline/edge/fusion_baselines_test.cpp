@@ -102,7 +102,8 @@ TEST_CASE("Fusion variants: parameter counts equal their closed forms", "[pipeli
   }
 }
 
-TEST_CASE("Fusion variants: docs/training.md's parameter counts at the default sizes", "[pipeline]") {
+TEST_CASE("Fusion variants: docs/training.md's parameter counts at the default sizes",
+          "[pipeline]") {
   // z = 16, d_model 64, 2 layers (UavLocModelConfig's defaults).
   InitTorch(1, 3);
   const auto count = [](FusionKind fusion, bool madw, bool mica) {
