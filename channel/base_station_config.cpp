@@ -2,8 +2,8 @@
 
 #include <algorithm>
 
-#include "sim/core/json_io.h"
-#include "sim/core/world_geometry.h"
+#include "core/json_io.h"
+#include "core/world_geometry.h"
 
 namespace uavsim::channel {
 

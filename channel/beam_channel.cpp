@@ -6,7 +6,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "sim/core/physical_constants.h"
+#include "core/physical_constants.h"
 
 namespace uavsim::channel {
 namespace {

@@ -54,7 +54,7 @@
 #include "channel/base_station_config.h"
 #include "channel/path_oracle.h"
 #include "channel/upa.h"
-#include "sim/core/rng.h"
+#include "core/rng.h"
 
 namespace uavsim::channel {
 

@@ -23,7 +23,7 @@
 #include "channel/beam_channel.h"
 #include "channel/path_oracle.h"
 #include "channel/upa.h"
-#include "sim/core/rng.h"
+#include "core/rng.h"
 
 namespace uavsim::channel {
 

@@ -31,8 +31,8 @@
 #include <vector>
 
 #include "channel/packet.h"
-#include "sim/core/json_io.h"
-#include "sim/core/time.h"
+#include "core/json_io.h"
+#include "core/time.h"
 
 namespace uavsim::channel {
 

@@ -5,7 +5,7 @@
 // channel::Uplink (uplink.h) implements the model; the formulas are there.
 //
 // Every key has a default and a validated range; reading is strict (see
-// sim/core/json_io.h): core::FromJson throws core::ConfigError naming the file
+// core/json_io.h): core::FromJson throws core::ConfigError naming the file
 // and the JSON pointer.
 #pragma once
 
@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "sim/core/rain_attenuation.h"
+#include "core/rain_attenuation.h"
 
 namespace uavsim::channel {
 

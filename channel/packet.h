@@ -18,8 +18,8 @@
 #include <memory>
 #include <vector>
 
-#include "sim/core/modality.h"
-#include "sim/core/time.h"
+#include "core/modality.h"
+#include "core/time.h"
 
 namespace uavsim::channel {
 

@@ -7,7 +7,7 @@
 #include <Eigen/Core>
 #include <vector>
 
-#include "sim/core/world_geometry.h"
+#include "core/world_geometry.h"
 
 namespace uavsim::channel {
 

@@ -6,8 +6,8 @@
 #include <stdexcept>
 #include <utility>
 
-#include "sim/core/json_io.h"
-#include "sim/core/rain_attenuation.h"
+#include "core/json_io.h"
+#include "core/rain_attenuation.h"
 
 namespace uavsim::channel {
 namespace {

@@ -33,7 +33,7 @@
 //                 fragments on average.
 //  5. kBitErrors  the radio's packet error rate at the current SNR:
 //                   A_rain = gamma_R(carrier_ghz, rain_mm_h) * path_length_m / 1000 [dB]
-//                            (ITU-R P.838-3, sim/core/rain_attenuation.h; uniform rain
+//                            (ITU-R P.838-3, core/rain_attenuation.h; uniform rain
 //                            over the path; 0 without carrier_ghz)
 //                   SNR    = snr_db + coding_gain_db - A_rain        [dB, Es/N0]
 //                   BER    = BitErrorRate(modulation, SNR)
@@ -64,10 +64,10 @@
 
 #include "channel/link_config.h"
 #include "channel/packet.h"
-#include "sim/core/rng.h"
-#include "sim/core/simulator.h"
-#include "sim/core/time.h"
-#include "sim/core/weather.h"
+#include "core/rng.h"
+#include "core/simulator.h"
+#include "core/time.h"
+#include "core/weather.h"
 
 namespace uavsim::channel {
 

@@ -5,7 +5,7 @@
 #include <system_error>
 
 #include "pipeline/model_checksums.h"
-#include "sim/core/error.h"
+#include "core/error.h"
 
 namespace uavsim::pipeline {
 namespace fs = std::filesystem;

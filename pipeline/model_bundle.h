@@ -21,7 +21,7 @@
 
 #include "pipeline/edge/edge_localizer.h"
 #include "pipeline/node/node_encoder.h"
-#include "pipeline/training/training_config.h"
+#include "pipeline/training_config.h"
 
 namespace uavsim::pipeline {
 
@@ -43,7 +43,7 @@ struct ModelManifest {
   // `uavloc_anchored`).
   std::string edge = "uavloc.pt";
   std::string anchored_edge;
-  // The variant it is (pipeline/training/variants.h; absent: "paper"): the
+  // The variant it is (pipeline/variants.h; absent: "paper"): the
   // run loop serves its paper-layout head as the method VariantMethod(variant).
   std::string variant = "paper";
   // How it was trained, every key resolved ("training"; absent in models

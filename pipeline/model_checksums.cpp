@@ -7,9 +7,9 @@
 #include <string>
 #include <vector>
 
-#include "sim/core/atomic_file.h"
-#include "sim/core/error.h"
-#include "sim/core/sha256.h"
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/sha256.h"
 
 namespace uavsim::pipeline {
 namespace fs = std::filesystem;

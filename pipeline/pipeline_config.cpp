@@ -4,8 +4,8 @@
 #include <cctype>
 #include <stdexcept>
 
-#include "pipeline/training/variants.h"
-#include "sim/core/json_io.h"
+#include "pipeline/variants.h"
+#include "core/json_io.h"
 
 namespace uavsim::pipeline {
 

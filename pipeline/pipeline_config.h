@@ -56,7 +56,7 @@ std::string ModalitySubsetName(int bits);
 inline constexpr int kModalitySubsets = 7;
 
 // The fixed method names a scenario may list. Beside them: each variant's
-// method (pipeline/training/variants.h: gru, no_mica, early_fusion, ...),
+// method (pipeline/variants.h: gru, no_mica, early_fusion, ...),
 // and any learned method (uavloc or a variant's) fed a subset of the
 // modalities as NAME[SUBSET], SUBSET one of camera, lidar, radar,
 // camera+lidar, camera+radar, lidar+radar, all (e.g. uavloc[camera+lidar];

@@ -8,7 +8,7 @@
 #include <fstream>
 #include <stdexcept>
 
-#include "sim/core/interrupt.h"
+#include "core/interrupt.h"
 
 namespace uavsim::results {
 namespace fs = std::filesystem;

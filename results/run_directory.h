@@ -12,12 +12,12 @@
 #include <optional>
 #include <string>
 
-#include "sim/core/atomic_file.h"
-#include "sim/core/json_io.h"
+#include "core/atomic_file.h"
+#include "core/json_io.h"
 
 namespace uavsim::results {
 
-// Writes `content` to `path` atomically (sim/core/atomic_file.h).
+// Writes `content` to `path` atomically (core/atomic_file.h).
 using core::WriteFileAtomic;
 
 // Whether `pid` is a live process of this host (a zombie is not).
@@ -57,7 +57,7 @@ class RunDirectory {
 
   // Moves staging to the final name (replacing an old run if `force`).
   // Throws core::Interrupted, moving nothing, once a termination request
-  // has arrived (sim/core/interrupt.h).
+  // has arrived (core/interrupt.h).
   void Commit();
 
   const std::string& final_dir() const { return final_dir_; }

@@ -19,8 +19,8 @@
 #include "results/csv.h"
 #include "results/gnuplot.h"
 #include "results/html.h"
-#include "sim/core/atomic_file.h"
-#include "sim/core/json_io.h"
+#include "core/atomic_file.h"
+#include "core/json_io.h"
 
 namespace uavsim::results {
 namespace {

@@ -11,7 +11,7 @@
 #include <utility>
 #include <vector>
 
-#include "sim/core/json_io.h"
+#include "core/json_io.h"
 
 namespace uavsim::results {
 

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <limits>
 
-#include "sim/core/physical_constants.h"
+#include "core/physical_constants.h"
 
 namespace uavsim::sensors {
 namespace {

@@ -8,8 +8,8 @@
 #include <atomic>
 #include <cmath>
 
-#include "sim/core/counter_normal.h"
-#include "sim/core/physical_constants.h"
+#include "core/counter_normal.h"
+#include "core/physical_constants.h"
 
 namespace uavsim::sensors {
 namespace {

@@ -52,7 +52,7 @@
 // inside a moving object's sphere, casts every pixel that frame.
 //
 // Determinism: Capture draws exactly one 64-bit value from `noise`; every
-// pixel's z is the counter-based normal (sim/core/counter_normal.h) of the
+// pixel's z is the counter-based normal (core/counter_normal.h) of the
 // key (that value, eye, row) at its column, so the images are the same
 // whatever the number of threads.
 // Threads: Capture runs tbb::parallel_for over rows; it may run concurrently
@@ -72,8 +72,8 @@
 #include "sensors/fisheye_stereo_config.h"
 #include "sensors/frames.h"
 #include "sensors/raycast_scene.h"
-#include "sim/core/rng.h"
-#include "sim/core/weather.h"
+#include "core/rng.h"
+#include "core/weather.h"
 
 namespace uavsim::sensors {
 

@@ -9,7 +9,7 @@
 #include <cstdint>
 
 #include "sensors/frame_timing.h"
-#include "sim/core/pose.h"
+#include "core/pose.h"
 
 namespace uavsim::sensors {
 

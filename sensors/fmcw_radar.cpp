@@ -17,9 +17,9 @@
 #include <tuple>
 #include <unordered_map>
 
-#include "sim/core/error.h"
-#include "sim/core/json_io.h"
-#include "sim/core/physical_constants.h"
+#include "core/error.h"
+#include "core/json_io.h"
+#include "core/physical_constants.h"
 
 namespace uavsim::sensors {
 namespace {

@@ -98,7 +98,7 @@
 // - |a_k|^2 = P_t G^2 lambda^2 sigma / ((4 pi)^3 R^4 k T0 fs F)
 //             * 10^(-2 gamma_rain R / 10^4)
 //   with gamma_rain = k R_rain^alpha dB/km, ITU-R P.838-3 (eq. 1), k and
-//   alpha from its regression (eqs. 2-5, sim/core/rain_attenuation.h) at
+//   alpha from its regression (eqs. 2-5, core/rain_attenuation.h) at
 //   carrier_ghz for config.polarization on a horizontal path (at 77 GHz,
 //   horizontal: k = 1.1320, alpha = 0.7177, 11.4 dB/km at 25 mm/h).
 // - Scatterers closer than 0.1 m or at or beyond max_range (whose beat would
@@ -161,10 +161,10 @@
 #include "sensors/frames.h"
 #include "sensors/radar_cube.h"
 #include "sensors/raycast_scene.h"
-#include "sim/core/rain_attenuation.h"
-#include "sim/core/rng.h"
-#include "sim/core/weather.h"
-#include "sim/core/world_geometry.h"
+#include "core/rain_attenuation.h"
+#include "core/rng.h"
+#include "core/weather.h"
+#include "core/world_geometry.h"
 
 namespace uavsim::sensors {
 

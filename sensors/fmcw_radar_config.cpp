@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "sim/core/json_io.h"
+#include "core/json_io.h"
 
 namespace uavsim::sensors {
 

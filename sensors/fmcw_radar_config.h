@@ -8,8 +8,8 @@
 
 #include "sensors/frame_timing.h"
 #include "sensors/radar_processing_config.h"
-#include "sim/core/pose.h"
-#include "sim/core/rain_attenuation.h"
+#include "core/pose.h"
+#include "core/rain_attenuation.h"
 
 namespace uavsim::sensors {
 
@@ -71,7 +71,7 @@ struct FmcwRadarConfig {
   bool thermal_noise = true;  // false: the noiseless cube (tests)
   // Rain attenuation gamma = k R^alpha dB/km: k and alpha from ITU-R P.838-3
   // at carrier_ghz for this polarisation on a horizontal path
-  // (sim/core/rain_attenuation.h).
+  // (core/rain_attenuation.h).
   core::Polarization polarization = core::Polarization::kHorizontal;
   // Rain clutter: volume reflectivity eta = coefficient R^exponent m^2/m^3
   // (R in mm/h) from rain_clutter_min_range_m out. The defaults are the Mie

@@ -12,7 +12,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "sim/core/physical_constants.h"
+#include "core/physical_constants.h"
 
 namespace uavsim::sensors {
 namespace {

@@ -106,8 +106,8 @@
 #include "sensors/lidar_atmosphere.h"
 #include "sensors/lidar_config.h"
 #include "sensors/raycast_scene.h"
-#include "sim/core/rng.h"
-#include "sim/core/weather.h"
+#include "core/rng.h"
+#include "core/weather.h"
 
 namespace uavsim::sensors {
 

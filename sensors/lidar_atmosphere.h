@@ -11,8 +11,8 @@
 #pragma once
 
 #include "sensors/lidar_config.h"
-#include "sim/core/rng.h"
-#include "sim/core/weather.h"
+#include "core/rng.h"
+#include "core/weather.h"
 
 namespace uavsim::sensors {
 

@@ -3,7 +3,7 @@
 #include <cmath>
 #include <string>
 
-#include "sim/core/json_io.h"
+#include "core/json_io.h"
 
 namespace uavsim::sensors {
 

@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "sensors/frame_timing.h"
-#include "sim/core/pose.h"
+#include "core/pose.h"
 
 namespace uavsim::sensors {
 

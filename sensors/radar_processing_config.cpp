@@ -3,7 +3,7 @@
 #include <utility>
 #include <vector>
 
-#include "sim/core/json_io.h"
+#include "core/json_io.h"
 
 namespace uavsim::sensors {
 

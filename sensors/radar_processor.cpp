@@ -13,8 +13,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "sim/core/interrupt.h"
-#include "sim/core/physical_constants.h"
+#include "core/interrupt.h"
+#include "core/physical_constants.h"
 
 namespace uavsim::sensors {
 namespace {

@@ -8,7 +8,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "sim/core/interrupt.h"
+#include "core/interrupt.h"
 
 namespace uavsim::sensors {
 namespace {

@@ -20,7 +20,7 @@
 #include <memory>
 #include <vector>
 
-#include "sim/core/world_geometry.h"
+#include "core/world_geometry.h"
 
 namespace uavsim::sensors {
 

@@ -1,6 +1,6 @@
 #include "sensors/sensor_config.h"
 
-#include "sim/core/json_io.h"
+#include "core/json_io.h"
 
 namespace uavsim::sensors {
 

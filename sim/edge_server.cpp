@@ -13,7 +13,7 @@
 #include "pipeline/pipeline_config.h"
 #include "pipeline/torch_runtime.h"
 #include "pipeline/training/trainer.h"
-#include "pipeline/training/variants.h"
+#include "pipeline/variants.h"
 
 namespace uavsim::sim {
 namespace {

@@ -17,7 +17,7 @@
 //                    the modalities, e.g. uavloc[camera+lidar] (Fig. 10)
 //   gru, tcn, no_mica, early_fusion, ...
 //                    a variant of the paper's pipeline (Sec. VI baselines and
-//                    ablations, pipeline/training/variants.h): the edge head
+//                    ablations, pipeline/variants.h): the edge head
 //                    of the model folder beside /pipeline/model named
 //                    FOLDER-VARIANT (trained with `uavsim train --variant V
 //                    --encoders FOLDER`: the nodes' encoders are shared), or
@@ -53,8 +53,8 @@
 #include "pipeline/edge/te_align.h"
 #include "pipeline/model_bundle.h"
 #include "pipeline/node/node_encoder.h"
-#include "sim/core/json_io.h"
-#include "sim/core/wall_profile.h"
+#include "core/json_io.h"
+#include "core/wall_profile.h"
 #include "sim/scenario.h"
 #include "sim/sensing_node.h"
 

@@ -9,7 +9,7 @@
 
 #include <string>
 
-#include "sim/core/json_io.h"
+#include "core/json_io.h"
 
 namespace uavsim::sim {
 

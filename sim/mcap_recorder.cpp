@@ -7,7 +7,7 @@
 #include <cmath>
 #include <cstring>
 
-#include "sim/core/time.h"
+#include "core/time.h"
 #include "sim/foxglove_schemas.h"
 #include "sim/version.h"
 

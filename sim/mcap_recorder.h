@@ -46,7 +46,7 @@
 #include "channel/edge_receiver.h"
 #include "results/mcap_writer.h"
 #include "sensors/frames.h"
-#include "sim/core/json_io.h"
+#include "core/json_io.h"
 #include "sim/scenario.h"
 #include "sim/world_model.h"
 

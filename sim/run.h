@@ -12,8 +12,8 @@
 #include <vector>
 
 #include "pipeline/training/dataset.h"
-#include "sim/core/interrupt.h"
-#include "sim/core/json_io.h"
+#include "core/interrupt.h"
+#include "core/json_io.h"
 #include "sim/scenario.h"
 
 namespace uavsim::sim {
@@ -28,7 +28,7 @@ struct RunOptions {
   bool report = true;
   std::vector<std::string> record;  // what to record: camera, lidar, radar, mcap
   std::string scenario_file;        // for the manifest
-  // Training-data generation (sim/train.h): when set, every node frame whose
+  // Training-data generation (apps/train/train.h): when set, every node frame whose
   // pre-processing found something is added to *collect with the truth at
   // its capture time and whether it reached the edge in time, and the truth
   // at every window's end; and nothing is written (out_dir is ignored).

@@ -6,7 +6,7 @@
 
 #include "sensors/fisheye_model.h"
 #include "sensors/raycast_scene.h"
-#include "sim/core/physical_constants.h"
+#include "core/physical_constants.h"
 
 namespace uavsim::sim {
 namespace {

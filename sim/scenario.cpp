@@ -5,9 +5,9 @@
 #include <filesystem>
 #include <set>
 
-#include "sim/core/machine.h"
-#include "sim/core/rng.h"
-#include "sim/core/world_geometry.h"
+#include "core/machine.h"
+#include "core/rng.h"
+#include "core/world_geometry.h"
 
 namespace uavsim::sim {
 

@@ -15,10 +15,10 @@
 #include "channel/link_config.h"
 #include "pipeline/pipeline_config.h"
 #include "sensors/sensor_config.h"
-#include "sim/core/json_io.h"
-#include "sim/core/trajectory.h"
-#include "sim/core/weather.h"
-#include "sim/core/world.h"
+#include "core/json_io.h"
+#include "core/trajectory.h"
+#include "core/weather.h"
+#include "core/world.h"
 
 namespace uavsim::sim {
 
@@ -29,7 +29,7 @@ struct FlightBoxConfig {
 };
 
 // How `uavsim train` varies the target (uavs[0]) from one training episode
-// to the next (sim/train.h); a run, and any other UAV, ignores it. Empty
+// to the next (apps/train/train.h); a run, and any other UAV, ignores it. Empty
 // lists change nothing: the target keeps size_m, and its episodes fly
 // around the region its own trajectory covers over the scenario's duration,
 // widened by 10 m.

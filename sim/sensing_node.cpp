@@ -12,9 +12,9 @@
 #include "sensors/fmcw_radar.h"
 #include "sensors/lidar.h"
 #include "sensors/radar_processor.h"
-#include "sim/core/error.h"
-#include "sim/core/interrupt.h"
-#include "sim/core/json_io.h"
+#include "core/error.h"
+#include "core/interrupt.h"
+#include "core/json_io.h"
 #include "sim/recorder.h"
 #include "sim/world_model.h"
 

@@ -23,10 +23,10 @@
 #include "channel/uplink.h"
 #include "pipeline/node/node_encoder.h"
 #include "pipeline/node/observations.h"
-#include "sim/core/periodic_process.h"
-#include "sim/core/rng.h"
-#include "sim/core/simulator.h"
-#include "sim/core/wall_profile.h"
+#include "core/periodic_process.h"
+#include "core/rng.h"
+#include "core/simulator.h"
+#include "core/wall_profile.h"
 #include "sim/scenario.h"
 
 namespace uavsim::sim {

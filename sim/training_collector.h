@@ -1,4 +1,4 @@
-// Training data from a run (sim/train.h): observes the sensing nodes' frames,
+// Training data from a run (apps/train/train.h): observes the sensing nodes' frames,
 // every message's fate at the edge (on time, late, lost) and the windows'
 // ends, and fills an Episode (pipeline/training/dataset.h): every frame whose
 // pre-processing found something, with the truth at the observation's own time stamp, when
@@ -8,7 +8,7 @@
 #pragma once
 
 #include "pipeline/training/dataset.h"
-#include "sim/core/time.h"
+#include "core/time.h"
 #include "sim/sensing_node.h"
 #include "sim/world_model.h"
 

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <utility>
 
-#include "sim/core/rain_attenuation.h"
+#include "core/rain_attenuation.h"
 
 namespace uavsim::sim {
 namespace {

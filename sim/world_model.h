@@ -10,8 +10,8 @@
 
 #include "channel/path_oracle.h"
 #include "sensors/raycast_scene.h"
-#include "sim/core/trajectory.h"
-#include "sim/core/world_geometry.h"
+#include "core/trajectory.h"
+#include "core/world_geometry.h"
 #include "sim/scenario.h"
 
 namespace uavsim::sim {

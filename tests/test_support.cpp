@@ -14,7 +14,7 @@
 #include <stdexcept>
 #include <thread>
 
-#include "sim/core/error.h"
+#include "core/error.h"
 
 namespace uavsim::testing {
 namespace fs = std::filesystem;

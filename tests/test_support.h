@@ -10,7 +10,7 @@
 #include <utility>
 #include <vector>
 
-#include "sim/core/world_geometry.h"
+#include "core/world_geometry.h"
 
 namespace uavsim::testing {
 

@@ -6,7 +6,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "sim/core/physical_constants.h"
+#include "core/physical_constants.h"
 
 namespace uavsim::pipeline {
 

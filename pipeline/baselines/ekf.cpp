@@ -12,7 +12,7 @@
 #include <utility>
 
 #include "pipeline/tracking/coordinated_turn.h"
-#include "sim/core/physical_constants.h"
+#include "core/physical_constants.h"
 
 namespace uavsim::pipeline {
 namespace {

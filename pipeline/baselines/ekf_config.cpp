@@ -1,6 +1,6 @@
 #include "pipeline/baselines/ekf_config.h"
 
-#include "sim/core/json_io.h"
+#include "core/json_io.h"
 
 namespace uavsim::pipeline {
 

@@ -10,8 +10,8 @@
 #include <stdexcept>
 #include <utility>
 
-#include "sim/core/error.h"
-#include "sim/core/zip_check.h"
+#include "core/error.h"
+#include "core/zip_check.h"
 
 namespace uavsim::pipeline {
 namespace {

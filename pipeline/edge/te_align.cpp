@@ -6,7 +6,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "sim/core/json_io.h"
+#include "core/json_io.h"
 
 namespace uavsim::pipeline {
 namespace {

@@ -9,10 +9,10 @@
 #include <stdexcept>
 #include <utility>
 
-#include "sim/core/atomic_file.h"
-#include "sim/core/error.h"
-#include "sim/core/json_io.h"
-#include "sim/core/zip_check.h"
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/json_io.h"
+#include "core/zip_check.h"
 
 namespace uavsim::pipeline {
 

@@ -2,7 +2,7 @@
 
 #include <string>
 
-#include "sim/core/json_io.h"
+#include "core/json_io.h"
 
 namespace uavsim::pipeline {
 

@@ -5,7 +5,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "sim/core/json_io.h"
+#include "core/json_io.h"
 
 namespace uavsim::pipeline {
 

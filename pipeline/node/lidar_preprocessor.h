@@ -46,7 +46,7 @@
 #include "pipeline/node/preprocess_config.h"
 #include "sensors/frames.h"
 #include "sensors/lidar_config.h"
-#include "sim/core/weather.h"
+#include "core/weather.h"
 
 namespace uavsim::pipeline {
 

@@ -6,7 +6,7 @@
 #include <cstddef>
 #include <vector>
 
-#include "sim/core/modality.h"
+#include "core/modality.h"
 
 namespace uavsim::pipeline {
 

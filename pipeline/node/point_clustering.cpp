@@ -7,7 +7,7 @@
 #include <stdexcept>
 #include <utility>
 
-#include "sim/core/interrupt.h"
+#include "core/interrupt.h"
 
 namespace uavsim::pipeline {
 namespace {

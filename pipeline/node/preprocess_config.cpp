@@ -1,6 +1,6 @@
 #include "pipeline/node/preprocess_config.h"
 
-#include "sim/core/json_io.h"
+#include "core/json_io.h"
 
 namespace uavsim::pipeline {
 

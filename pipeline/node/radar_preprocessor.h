@@ -45,7 +45,7 @@
 #include "pipeline/node/preprocess_config.h"
 #include "sensors/fmcw_radar_config.h"
 #include "sensors/frames.h"
-#include "sim/core/weather.h"
+#include "core/weather.h"
 
 namespace uavsim::pipeline {
 

@@ -132,7 +132,7 @@ enum class DataSplit {
 };
 const char* DataSplitName(DataSplit s);  // "trajectory", "frame"
 
-// The weather an episode was simulated in, from its label (sim/train.cpp
+// The weather an episode was simulated in, from its label (apps/train/train.cpp
 // writes ", rain N mm/h" and ", fog N m"): "clear", "rain", "fog" or
 // "rain+fog".
 std::string WeatherOf(const Episode& e);

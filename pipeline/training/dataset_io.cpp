@@ -14,7 +14,7 @@
 #include <stdexcept>
 #include <type_traits>
 
-#include "sim/core/error.h"
+#include "core/error.h"
 
 namespace uavsim::pipeline {
 namespace {

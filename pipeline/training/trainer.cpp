@@ -17,9 +17,9 @@
 #include "pipeline/node/ib_encoder.h"
 #include "pipeline/node/ib_model_io.h"
 #include "pipeline/node/ib_normalization.h"
-#include "pipeline/training/variants.h"
-#include "sim/core/json_io.h"
-#include "sim/core/progress.h"
+#include "pipeline/variants.h"
+#include "core/json_io.h"
+#include "core/progress.h"
 
 namespace uavsim::pipeline {
 namespace {

@@ -27,7 +27,7 @@
 #include "pipeline/node/ib_cc_config.h"
 #include "pipeline/pipeline_config.h"
 #include "pipeline/training/dataset.h"
-#include "pipeline/training/training_config.h"
+#include "pipeline/training_config.h"
 
 namespace uavsim::pipeline {
 

@@ -9,8 +9,8 @@
 #include <string>
 
 #include "channel/beamformer.h"
-#include "sim/core/error.h"
-#include "sim/core/json_io.h"
+#include "core/error.h"
+#include "core/json_io.h"
 
 using uavsim::channel::BaseStationConfig;
 using uavsim::channel::BeamChannel;

@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "channel/packet.h"
-#include "sim/core/time.h"
+#include "core/time.h"
 
 using uavsim::channel::EdgeReceiver;
 using uavsim::channel::Message;

@@ -3,7 +3,7 @@
 #include <catch2/catch.hpp>
 #include <string>
 
-#include "sim/core/json_io.h"
+#include "core/json_io.h"
 #include "test_support.h"
 
 using uavsim::channel::CheckOutageNodes;

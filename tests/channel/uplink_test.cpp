@@ -8,9 +8,9 @@
 #include <vector>
 
 #include "channel/packet.h"
-#include "sim/core/error.h"
-#include "sim/core/simulator.h"
-#include "sim/core/time.h"
+#include "core/error.h"
+#include "core/simulator.h"
+#include "core/time.h"
 
 using uavsim::channel::BitErrorRate;
 using uavsim::channel::Fragment;

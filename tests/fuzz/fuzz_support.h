@@ -15,7 +15,7 @@
 #include <string>
 #include <typeinfo>
 
-#include "sim/core/error.h"
+#include "core/error.h"
 
 namespace uavsim::fuzz {
 

@@ -16,8 +16,8 @@
 #include <cstdint>
 
 #include "fuzz_support.h"
-#include "sim/core/json_io.h"
-#include "sim/sweep_spec.h"
+#include "core/json_io.h"
+#include "apps/sweep/sweep_spec.h"
 
 namespace {
 

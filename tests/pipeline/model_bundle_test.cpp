@@ -13,8 +13,8 @@
 #include "pipeline/node/ib_encoder.h"
 #include "pipeline/node/ib_model_io.h"
 #include "pipeline/torch_runtime.h"
-#include "sim/core/error.h"
-#include "sim/core/sha256.h"
+#include "core/error.h"
+#include "core/sha256.h"
 #include "test_support.h"
 
 namespace uavsim::pipeline {

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "sensors/fisheye_model.h"
-#include "sim/core/rng.h"
+#include "core/rng.h"
 
 namespace uavsim::sensors {
 namespace {

@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "sensors/fisheye_stereo.h"
-#include "sim/core/world_geometry.h"
+#include "core/world_geometry.h"
 #include "test_support.h"
 
 namespace uavsim::sensors {

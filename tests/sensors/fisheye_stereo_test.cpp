@@ -13,9 +13,9 @@
 
 #include "sensors/fisheye_stereo.h"
 #include "sensors/image_io.h"
-#include "sim/core/error.h"
-#include "sim/core/json_io.h"
-#include "sim/core/world_geometry.h"
+#include "core/error.h"
+#include "core/json_io.h"
+#include "core/world_geometry.h"
 
 namespace uavsim::sensors {
 namespace {

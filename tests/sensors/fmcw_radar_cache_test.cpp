@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "sensors/fmcw_radar.h"
-#include "sim/core/world_geometry.h"
+#include "core/world_geometry.h"
 #include "test_support.h"
 
 namespace uavsim::sensors {

@@ -1,7 +1,7 @@
 // FMCW radar scatterers and IF-cube synthesis against closed forms: the
 // header's signal model written out again here sample by sample, the radar
 // equation's 40 log10 R, kTBF noise, plane and box geometry, projected-area
-// RCS, ITU-R P.838-3 rain attenuation (sim/core/rain_attenuation.h and the
+// RCS, ITU-R P.838-3 rain attenuation (core/rain_attenuation.h and the
 // uplink's rain loss at the same carrier as the oracles), the rain clutter's
 // eta law, ground multipath, determinism and config errors. Expected values
 // never come from the model's own output.
@@ -21,10 +21,10 @@
 #include "test_support.h"
 
 #include "channel/uplink.h"
-#include "sim/core/error.h"
-#include "sim/core/json_io.h"
-#include "sim/core/rain_attenuation.h"
-#include "sim/core/simulator.h"
+#include "core/error.h"
+#include "core/json_io.h"
+#include "core/rain_attenuation.h"
+#include "core/simulator.h"
 
 using uavsim::core::Material;
 using uavsim::core::RadarClass;

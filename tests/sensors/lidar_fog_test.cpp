@@ -15,8 +15,8 @@
 
 #include "sensors/lidar.h"
 #include "sensors/lidar_atmosphere.h"
-#include "sim/core/error.h"
-#include "sim/core/json_io.h"
+#include "core/error.h"
+#include "core/json_io.h"
 
 using uavsim::core::Mix64;
 using uavsim::core::RngStream;

@@ -19,8 +19,8 @@
 #include "test_support.h"
 
 #include "sensors/ply_io.h"
-#include "sim/core/error.h"
-#include "sim/core/json_io.h"
+#include "core/error.h"
+#include "core/json_io.h"
 
 using uavsim::core::Material;
 using uavsim::core::RadarClass;

@@ -21,12 +21,12 @@
 
 #include "sensors/fmcw_radar.h"
 #include "sensors/radar_image.h"
-#include "sim/core/error.h"
-#include "sim/core/interrupt.h"
-#include "sim/core/json_io.h"
-#include "sim/core/pose.h"
-#include "sim/core/rng.h"
-#include "sim/core/world_geometry.h"
+#include "core/error.h"
+#include "core/interrupt.h"
+#include "core/json_io.h"
+#include "core/pose.h"
+#include "core/rng.h"
+#include "core/world_geometry.h"
 
 using uavsim::core::RngStream;
 using uavsim::sensors::AngleMethod;

@@ -5,8 +5,8 @@
 #include <cmath>
 #include "test_support.h"
 
-#include "sim/core/interrupt.h"
-#include "sim/core/rng.h"
+#include "core/interrupt.h"
+#include "core/rng.h"
 
 using uavsim::core::TriangleMesh;
 using uavsim::core::WorldGeometry;

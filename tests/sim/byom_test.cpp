@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "pipeline/training/dataset_io.h"
-#include "sim/core/json_io.h"
+#include "core/json_io.h"
 #include "test_support.h"
 
 namespace {

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "results/csv.h"
-#include "sim/core/json_io.h"
+#include "core/json_io.h"
 #include "sim/scenario.h"
 #include "sim/world_model.h"
 #include "test_support.h"

@@ -19,10 +19,10 @@
 #include <string>
 #include <vector>
 
-#include "sim/core/error.h"
-#include "sim/core/json_io.h"
-#include "sim/core/rng.h"
-#include "sim/core/trajectory.h"
+#include "core/error.h"
+#include "core/json_io.h"
+#include "core/rng.h"
+#include "core/trajectory.h"
 
 using Eigen::Matrix3d;
 using Eigen::Vector3d;

@@ -14,8 +14,8 @@
 #include "pipeline/edge/edge_localizer.h"
 #include "pipeline/edge/uavloc_model.h"
 #include "pipeline/torch_runtime.h"
-#include "sim/core/error.h"
-#include "sim/core/json_io.h"
+#include "core/error.h"
+#include "core/json_io.h"
 #include "test_support.h"
 
 namespace uavsim::pipeline {

@@ -17,7 +17,7 @@
 #include "pipeline/edge/temporal_regressor.h"
 #include "pipeline/edge/uavloc_model.h"
 #include "pipeline/torch_runtime.h"
-#include "sim/core/json_io.h"
+#include "core/json_io.h"
 #include "test_support.h"
 
 namespace uavsim::pipeline {

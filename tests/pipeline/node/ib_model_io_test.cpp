@@ -13,7 +13,7 @@
 #include "pipeline/node/ib_model_io.h"
 #include "pipeline/node/node_encoder.h"
 #include "pipeline/torch_runtime.h"
-#include "sim/core/error.h"
+#include "core/error.h"
 #include "test_support.h"
 
 namespace uavsim::pipeline {

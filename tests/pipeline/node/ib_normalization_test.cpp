@@ -5,7 +5,7 @@
 
 #include "pipeline/node/ib_cc_config.h"
 #include "pipeline/node/ib_normalization.h"
-#include "sim/core/json_io.h"
+#include "core/json_io.h"
 #include "test_support.h"
 
 namespace uavsim::pipeline {

@@ -12,7 +12,7 @@
 
 #include "pipeline/node/camera_preprocessor.h"
 #include "sensors/fisheye_model.h"
-#include "sim/core/rng.h"
+#include "core/rng.h"
 
 namespace uavsim::pipeline {
 namespace {

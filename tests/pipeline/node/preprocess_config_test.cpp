@@ -3,8 +3,8 @@
 #include <string>
 
 #include "pipeline/node/preprocess_config.h"
-#include "sim/core/error.h"
-#include "sim/core/json_io.h"
+#include "core/error.h"
+#include "core/json_io.h"
 
 namespace uavsim::pipeline {
 namespace {

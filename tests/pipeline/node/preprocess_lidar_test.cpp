@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "pipeline/node/lidar_preprocessor.h"
-#include "sim/core/rng.h"
+#include "core/rng.h"
 
 namespace uavsim::pipeline {
 namespace {

@@ -8,8 +8,8 @@
 
 #include "pipeline/node/point_clustering.h"
 #include "pipeline/node/radar_preprocessor.h"
-#include "sim/core/interrupt.h"
-#include "sim/core/rng.h"
+#include "core/interrupt.h"
+#include "core/rng.h"
 
 namespace uavsim::pipeline {
 namespace {

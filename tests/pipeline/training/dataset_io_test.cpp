@@ -14,7 +14,7 @@
 
 #include "pipeline/training/dataset.h"
 #include "pipeline/training/dataset_io.h"
-#include "sim/core/error.h"
+#include "core/error.h"
 #include "test_support.h"
 
 namespace uavsim::pipeline {

@@ -24,8 +24,8 @@
 #include "pipeline/torch_runtime.h"
 #include "pipeline/training/dataset.h"
 #include "pipeline/training/trainer.h"
-#include "pipeline/training/variants.h"
-#include "sim/core/json_io.h"
+#include "pipeline/variants.h"
+#include "core/json_io.h"
 #include "test_support.h"
 
 namespace uavsim::pipeline {

@@ -1,0 +1,91 @@
+// The uavsim command line (DESIGN.md "Command line"): one table of commands,
+// each with the options it accepts, its help and its body (a file each in
+// apps/cli/). Bad input throws core::UsageError or core::ConfigError; main()
+// turns them into one line on stderr and exit code 2.
+#pragma once
+
+#include <map>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+namespace uavsim::cli {
+
+constexpr int kExitOk = 0;
+constexpr int kExitFailure = 1;
+constexpr int kExitBadInput = 2;
+constexpr int kExitInterrupted = 130;
+
+// One option of a command: its name ("--seed") and whether it takes a value.
+// Every command also accepts --help and --quiet.
+struct Option {
+  std::string name;
+  bool takes_value = false;
+};
+
+// A command line after its command: positional arguments, values of the
+// options that take one (every occurrence, in order), flags given.
+struct ParsedArgs {
+  std::vector<std::string> positional;
+  std::map<std::string, std::vector<std::string>> values;
+  std::set<std::string> flags;
+  bool Has(const std::string& f) const { return flags.count(f) || values.count(f); }
+  // The last value given for `f`.
+  std::optional<std::string> Value(const std::string& f) const;
+  // Every value given for `f` (none: empty).
+  std::vector<std::string> Values(const std::string& f) const;
+};
+
+// One row of the command table.
+struct Command {
+  std::string name;
+  std::string usage;    // "validate SCENARIO.json": the main help's left column
+  std::string summary;  // its right column
+  std::vector<Option> options;
+  std::string (*help)();  // `uavsim NAME --help`
+  // Runs the command; argv is the whole command line (argv[1] is its name).
+  int (*run)(const ParsedArgs& args, int argc, char** argv);
+  // Checks the raw arguments before they are parsed (may be null).
+  void (*precheck)(int argc, char** argv) = nullptr;
+};
+
+// The commands, in the order `uavsim --help` lists them.
+const std::vector<Command>& Commands();
+
+// Parses argv[first..] against `command`'s options (and --help, --quiet);
+// an unknown option or a missing value is a UsageError naming the command.
+ParsedArgs Parse(const Command& command, int argc, char** argv, int first);
+
+// --set P=V overrides of the scenario.
+std::vector<std::string> Overrides(const ParsedArgs& a);
+// The one positional argument, a scenario file.
+const std::string& OneScenario(const std::string& cmd, const ParsedArgs& a);
+// --record LIST: camera, lidar, radar and mcap, comma-separated (none: empty).
+std::vector<std::string> RecordList(const std::string& cmd, const ParsedArgs& a);
+// An integer option in [0, max].
+std::uint64_t UnsignedOption(const std::string& cmd, const std::string& name, const std::string& v,
+                             std::uint64_t max);
+// A number in [lo, hi]; `what` says what is expected ("seconds from 1 to 3600").
+double NumberOption(const std::string& cmd, const std::string& name, const std::string& v,
+                    double lo, double hi, const std::string& what);
+// "uavsim ARG1 ARG2 ...", as the model folder and the plan record keep it.
+std::string CommandLine(int argc, char** argv);
+// "12 s", "3.4 min", "2.1 h".
+std::string Duration(double s);
+
+// --verbose of `uavsim run`: a failing TorchScript method's whole traceback
+// after its line (main() prints it).
+bool& Verbose();
+
+// The commands' rows (apps/cli/<name>.cpp).
+Command ValidateCommand();
+Command RunCommand();
+Command SweepCommand();
+Command TrainCommand();
+Command DatasetCommand();
+Command ReproduceCommand();
+Command ReportCommand();
+Command BenchCommand();
+
+}  // namespace uavsim::cli

@@ -1,0 +1,143 @@
+// `uavsim run`: one scenario end to end into its run directory.
+#include <unistd.h>
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+
+#include "apps/cli/cli.h"
+#include "core/error.h"
+#include "sim/edge_server.h"
+#include "sim/run.h"
+#include "sim/run_cost.h"
+#include "sim/scenario.h"
+
+namespace uavsim::cli {
+namespace {
+
+using core::UsageError;
+
+const char* kHelp =
+    "usage: uavsim run SCENARIO.json [--out DIR] [--seed N] [--duration S] [--record "
+    "camera,lidar,radar,mcap]\n"
+    "                               [--set /json/pointer=value]... [--force] [--quiet] "
+    "[--verbose]\n"
+    "\n"
+    "Runs the scenario and writes DIR (default runs/NAME-sSEED): manifest.json, truth.csv,\n"
+    "estimates.csv, metrics.json (RMSE per method, packets, data rates), packets.csv,\n"
+    "rate_snr.csv/.png, world_top.csv and layout.csv (the map), report.html (figures and\n"
+    "tables: open it in a browser) with report/, and recorded frames. The directory\n"
+    "appears only when the run is complete. Methods (/pipeline/methods): uavloc (the\n"
+    "paper's pipeline), uavloc_camera/_lidar/_radar (it on one modality), uavloc_anchored\n"
+    "(our anchored head), anchor_track (its filter alone), ekf (the classical baseline).\n"
+    "The learned ones use the model /pipeline/model names (\"default\": the one shipped\n"
+    "for scenarios/default.json; `uavsim train` makes others).\n"
+    "\n"
+    "  --out DIR       run directory (refused if it exists, unless --force)\n"
+    "  --seed N        override the scenario's seed (same as --set /seed=N)\n"
+    "  --duration S    override duration_s (same as --set /duration_s=S)\n"
+    "  --record LIST   record raw frames of these modalities under DIR/frames/; mcap:\n"
+    "                  DIR/recording.mcap, every sensor, the world, truth, estimates and\n"
+    "                  uplink in one file for Foxglove (docs/recordings.md)\n"
+    "  --set P=V       override the value at JSON pointer P\n"
+    "  --force         replace DIR if it exists\n"
+    "  --quiet         no progress or summary output\n"
+    "  --verbose       a failing TorchScript method's whole traceback after its line\n";
+
+// A recording that would not fit the output's file system is refused
+// before anything is made.
+void RequireRoomToRecord(const sim::Scenario& s, const sim::RunOptions& o) {
+  if (o.record.empty()) return;
+  const double bytes = sim::EstimateRecordBytes(s, o.record);
+  const double free = sim::FreeBytesFor(o.out_dir);
+  if (free < 0 || bytes <= free) return;
+  char text[256];
+  std::snprintf(text, sizeof text,
+                "uavsim run: --record would write up to %.3g bytes; the file system of %s has "
+                "%.3g free",
+                bytes, o.out_dir.c_str(), free);
+  throw UsageError(text);
+}
+
+// Where the time went, on a terminal: the three largest parts of the
+// run's profile_s (metrics.json has them all).
+void PrintTopParts(const sim::RunSummary& summary) {
+  std::vector<std::pair<std::string, double>> parts = summary.profile_s;
+  std::stable_sort(parts.begin(), parts.end(),
+                   [](const auto& a, const auto& b) { return a.second > b.second; });
+  if (parts.empty() || summary.wall_s <= 0.0) return;
+  std::printf("time:");
+  for (std::size_t i = 0; i < parts.size() && i < 3; ++i)
+    std::printf("%s %s %.1f s (%.0f %%)", i ? "," : "", parts[i].first.c_str(), parts[i].second,
+                100.0 * parts[i].second / summary.wall_s);
+  std::printf(" (profile_s in metrics.json)\n");
+}
+
+int Run(const ParsedArgs& a, int, char**) {
+  Verbose() = a.Has("--verbose");
+  const std::string& file = OneScenario("run", a);
+  std::vector<std::string> overrides = Overrides(a);
+  if (auto seed = a.Value("--seed")) {
+    if (seed->empty() || seed->find_first_not_of("0123456789") != std::string::npos ||
+        seed->size() > 19)
+      throw UsageError("uavsim run: --seed expects a non-negative integer, got '" + *seed + "'");
+    overrides.push_back("/seed=" + *seed);
+  }
+  if (auto d = a.Value("--duration")) {
+    char* end = nullptr;
+    const double v = std::strtod(d->c_str(), &end);
+    if (d->empty() || *end != '\0' || !(v > 0))
+      throw UsageError("uavsim run: --duration expects a positive number of seconds, got '" + *d +
+                       "'");
+    overrides.push_back("/duration_s=" + *d);
+  }
+  sim::RunOptions o;
+  o.quiet = a.Has("--quiet");
+  o.force = a.Has("--force");
+  o.scenario_file = file;
+  o.record = RecordList("run", a);
+  const sim::Scenario s = sim::LoadScenario(file, overrides);
+  sim::CheckTrainedModel(s, file, a.Has("--quiet"));  // what validate checks, first
+  o.out_dir = a.Value("--out").value_or("runs/" + s.name + "-s" + std::to_string(s.seed));
+  RequireRoomToRecord(s, o);
+  const auto summary = sim::RunScenario(s, o);
+  if (!o.quiet) {
+    std::printf("%s: %g s simulated in %.3f s (%.3gx real time); truth.csv %zu rows; frames",
+                o.out_dir.c_str(), summary.sim_s, summary.wall_s,
+                summary.wall_s > 0 ? summary.sim_s / summary.wall_s : 0.0, summary.truth_rows);
+    for (const auto& [m, n] : summary.frames)
+      std::printf(" %s %llu", m.c_str(), static_cast<unsigned long long>(n));
+    std::printf("\n");
+    if (!summary.rmse_m.empty()) {
+      std::printf("RMSE (m):");
+      for (const auto& [method, rmse] : summary.rmse_m) {
+        if (rmse)
+          std::printf(" %s %.3f", method.c_str(), *rmse);
+        else
+          std::printf(" %s n/a", method.c_str());
+      }
+      std::printf("\n");
+    }
+    if (!summary.rmse_common_m.empty()) {
+      std::printf("RMSE (m) over the %llu windows every method estimated:",
+                  static_cast<unsigned long long>(summary.common_windows));
+      for (const auto& [method, rmse] : summary.rmse_common_m)
+        std::printf(" %s %.3f", method.c_str(), rmse);
+      std::printf("\n");
+    }
+    if (::isatty(STDOUT_FILENO)) PrintTopParts(summary);
+  }
+  return kExitOk;
+}
+
+std::string Help() { return kHelp; }
+
+}  // namespace
+
+Command RunCommand() {
+  return {"run", "run SCENARIO.json", "run a scenario and write its run directory",
+          {{"--out", true}, {"--seed", true}, {"--duration", true}, {"--record", true}, {"--set", true}, {"--force", false}, {"--verbose", false}},
+          Help, Run};
+}
+
+}  // namespace uavsim::cli

@@ -1,0 +1,457 @@
+#include "apps/reproduce/reproduce.h"
+
+#include <algorithm>
+#include <boost/mpi/communicator.hpp>
+#include <boost/mpi/environment.hpp>
+#include <chrono>
+#include <cmath>
+#include <ctime>
+#include <deque>
+#include <filesystem>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <set>
+
+#include "pipeline/torch_runtime.h"
+#include "pipeline/training/dataset_io.h"
+#include "pipeline/training_config.h"
+#include "pipeline/variants.h"
+#include "results/run_directory.h"
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/file_lock.h"
+#include "core/interrupt.h"
+#include "core/json_io.h"
+#include "apps/sweep/process_farm.h"
+#include "apps/reproduce/reproduce_report.h"
+#include "sim/run.h"
+
+namespace uavsim::sim {
+namespace {
+
+namespace fs = std::filesystem;
+using core::Json;
+
+constexpr const char* kFormat = "uavsim-reproduce/1";
+
+// The variants other than `base` whose nodes send what base's do: trained
+// on base's encoders, stage 2 only (paper: Figs. 11a-14; raw: Fig. 11b).
+std::vector<std::string> OnEncodersOf(const std::string& base) {
+  std::vector<std::string> out;
+  const pipeline::Variant& b = *pipeline::FindVariant(base);
+  for (const pipeline::Variant& v : pipeline::Variants())
+    if (v.name != base && pipeline::SameNodes(v, b)) out.push_back(v.name);
+  return out;
+}
+
+std::string ArmId(const std::string& variant, int z, std::uint64_t seed, bool frame = false) {
+  return variant + "-z" + std::to_string(z) + "-s" + std::to_string(seed) + (frame ? "-frame" : "");
+}
+
+std::string ModelDir(const std::string& dir, const std::string& id) {
+  return (fs::path(dir) / "models" / id).string();
+}
+
+std::string SetFile(const std::string& dir, const std::string& set) {
+  return (fs::path(dir) / "episodes" / (set + ".eps")).string();
+}
+
+bool ArmDone(const std::string& dir, const std::string& id) {
+  std::error_code ec;
+  return fs::is_regular_file(fs::path(ModelDir(dir, id)) / "training_report.json", ec);
+}
+
+// The scenario an arm's nodes run: the variant's raw modalities, latent z.
+Scenario ArmScenario(const Scenario& base, const ReproduceArm& arm) {
+  Scenario s = base;
+  s.pipeline.latent_dim = arm.latent_dim;
+  ApplyVariantNodes(*pipeline::FindVariant(arm.variant), s);
+  return s;
+}
+
+// What identifies the data of DIR: a rerun with other episodes, latent sizes
+// or training budget is refused.
+Json PlanRecord(const Scenario& base, const ReproducePlan& plan, bool quick) {
+  return {{"format", kFormat},
+          {"scenario", base.name},
+          {"layout_hash", LayoutHash(base)},
+          {"quick", quick},
+          {"episodes", plan.episodes.episodes},
+          {"episode_s", plan.episodes.episode_s},
+          {"data_seed", plan.episodes.seed},
+          {"latent_dims", plan.latent_dims},
+          {"training", pipeline::TrainingConfigJson(plan.training)},
+          {"equivalence_fraction", plan.equivalence_fraction}};
+}
+
+// Keys a plan record may lack when an older uavsim wrote it: added to it,
+// not a reason to refuse the folder.
+bool AddedLater(const std::string& key) { return key == "equivalence_fraction"; }
+
+// What killed invocations left: temporary files of dead processes, the
+// episode sets' scratch folders (their episodes are simulated again).
+void RemoveRemains(const std::string& dir) {
+  results::RemoveStaleTemporaries(dir);
+  results::RemoveStaleTemporaries((fs::path(dir) / "episodes").string());
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(fs::path(dir) / "episodes", ec))
+    if (e.path().extension() == ".partial") fs::remove_all(e.path(), ec);
+}
+
+void PrepareDir(const std::string& dir, const Json& record) {
+  results::RemoveStaleStaging(dir);  // what killed commands left beside it, of any name
+  const fs::path file = fs::path(dir) / "reproduce.json";
+  std::error_code ec;
+  if (fs::is_regular_file(file, ec)) {
+    Json old;
+    try {
+      old = Json::parse(core::ReadFileBytes(file.string()));
+    } catch (const Json::exception& e) {
+      throw core::UsageError(file.string() + ": unreadable: " + e.what());
+    }
+    bool added = false;
+    for (const auto& [key, value] : record.items()) {
+      if (!old.contains(key) && AddedLater(key)) {
+        old[key] = value, added = true;
+        continue;
+      }
+      if (!old.contains(key) || old[key] != value)
+        throw core::UsageError("uavsim reproduce: " + dir + " holds a reproduction of another " +
+                               "plan (" + key + " " + (old.contains(key) ? old[key].dump() : "?") +
+                               ", now " + value.dump() + "): use another --out");
+    }
+    if (added) core::WriteFileAtomic(file.string(), old.dump(2) + "\n");
+    RemoveRemains(dir);
+    return;
+  }
+  fs::create_directories(fs::path(dir) / "models");
+  fs::create_directories(fs::path(dir) / "episodes");
+  core::WriteFileAtomic(file.string(), record.dump(2) + "\n");
+}
+
+// The sets the arms train on, in plan order.
+std::vector<std::string> SetsOf(const ReproducePlan& plan) {
+  std::vector<std::string> sets;
+  for (const ReproduceArm& a : plan.arms)
+    if (std::find(sets.begin(), sets.end(), a.set) == sets.end()) sets.push_back(a.set);
+  return sets;
+}
+
+std::uint8_t MaskOfSet(const ReproducePlan& plan, const std::string& set) {
+  for (const ReproduceArm& a : plan.arms)
+    if (a.set == set) return pipeline::FindVariant(a.variant)->raw_modalities;
+  return 0;
+}
+
+// Tab. II: a short run of the scenario per z, nodes pre-processing, no
+// learned method (the bytes a node sends do not depend on the weights).
+void RunDataRates(const Scenario& base, const ReproducePlan& plan, const std::string& dir,
+                  bool quiet) {
+  for (int z : plan.latent_dims) {
+    const std::string out = (fs::path(dir) / "data_rates" / ("z" + std::to_string(z))).string();
+    std::error_code ec;
+    if (fs::is_regular_file(fs::path(out) / "metrics.json", ec)) continue;
+    Scenario s = base;
+    s.pipeline.latent_dim = z;
+    s.pipeline.methods = {"ekf"};
+    s.pipeline.scripted.clear();
+    s.duration_s = plan.rate_run_s;
+    RunOptions o;
+    o.out_dir = out;
+    o.quiet = true;
+    o.report = false;
+    o.scenario_file = base.name + " (uavsim reproduce, data rates, z " + std::to_string(z) + ")";
+    if (!quiet) std::cerr << "uavsim reproduce: data-rate run, z = " << z << "\n";
+    RunScenario(s, o);
+  }
+}
+
+// DIR/invocations.csv gets a row per invocation that got past the
+// episodes: when it started, its wall time, what it trained, how it ended
+// (reported, failed, interrupted; a SIGKILL leaves no row).
+void LogInvocation(const std::string& dir, const std::string& started_utc, double wall_s, int jobs,
+                   std::size_t trained, const std::string& ended) {
+  const std::string file = (fs::path(dir) / "invocations.csv").string();
+  std::error_code ec;
+  std::string text = fs::is_regular_file(file, ec) ? core::ReadFileBytes(file)
+                                                   : "started_utc,wall_s,jobs,trained,ended\n";
+  text += started_utc + "," + core::FormatNumber(std::round(wall_s * 10.0) / 10.0) + "," +
+          std::to_string(jobs) + "," + std::to_string(trained) + "," + ended + "\n";
+  core::WriteFileAtomic(file, text);
+}
+
+std::string UtcNow() {
+  const std::time_t t = std::time(nullptr);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&t));
+  return buf;
+}
+
+}  // namespace
+
+std::string EpisodeSetName(std::uint8_t raw) {
+  switch (raw) {
+    case 0:
+      return "pre";
+    case 7:
+      return "raw";
+    case 1:
+      return "raw_camera";
+    case 6:
+      return "raw_lidar_radar";
+    default:
+      return "raw" + std::to_string(raw);
+  }
+}
+
+ReproducePlan MakeReproducePlan(const Scenario& base, const ReproduceOptions& o) {
+  ReproducePlan plan;
+  const TrainDefaults d = Defaults(false);
+  plan.episodes = d.plan;
+  plan.episodes.episodes = 30;  // 21 / 4 / 5 flights by trajectory
+  plan.episodes.episode_s = 20.0;
+  plan.training = d.training;
+  // One budget for every arm (the same for the paper's design and its
+  // baselines), sized so that a scenario's 87 trainings and four episode
+  // sets fit in one sitting on 2 cores (the aim: at most 3 hours):
+  // stage 1 sees at most 6 x 1000 observations per modality (a raw LiDAR
+  // scan is 1024 points through PointNet, a raw camera frame whole: the
+  // default 30 x 3000 took over 37 CPU-minutes for one raw model), stage 2
+  // at most 30 epochs. z in {4, 16, 64}, the paper's ends and middle.
+  plan.training.stage1_max_epochs = 6;
+  plan.training.stage1_patience = 3;
+  plan.training.stage1_max_samples_per_epoch = 1000;
+  plan.training.stage1_max_validation_samples = 512;
+  plan.training.stage2_max_epochs = 30;
+  plan.training.stage2_patience = 8;
+  plan.latent_dims = {4, 16, 64};
+  if (o.quick) {
+    // Every arm at toy size: the plan's shape in minutes, not its results
+    // (two seeds, three latent sizes: every artefact, within 10 minutes).
+    plan.seeds = 2;
+    plan.episodes.episodes = 6;  // 4 / 1 / 1 by trajectory
+    plan.episodes.episode_s = 5.0;
+    plan.episodes.vary_weather = false;
+    pipeline::TrainingConfig& t = plan.training;
+    t.stage1_max_epochs = 2;
+    t.stage1_patience = 1;
+    t.stage1_min_samples_per_epoch = 64;
+    t.stage1_max_samples_per_epoch = 64;
+    t.stage1_max_validation_samples = 64;
+    t.stage2_max_epochs = 2;
+    t.stage2_patience = 1;
+    t.stage2_sequence_windows = 10;
+    t.stage2_min_steps_per_epoch = 2;
+    t.stage1_lr = t.stage2_lr = 2e-3;
+    plan.rate_run_s = 4.0;
+  }
+  if (o.episodes > 0) plan.episodes.episodes = o.episodes;
+  if (o.seeds > 0) plan.seeds = o.seeds;
+  plan.scenario_latent_dim = base.pipeline.latent_dim;
+  if (std::find(plan.latent_dims.begin(), plan.latent_dims.end(), plan.scenario_latent_dim) ==
+      plan.latent_dims.end()) {
+    plan.latent_dims.push_back(plan.scenario_latent_dim);
+    std::sort(plan.latent_dims.begin(), plan.latent_dims.end());
+  }
+  const int z0 = plan.scenario_latent_dim;
+  const auto arm = [&](const std::string& variant, int z, std::uint64_t seed,
+                       const std::string& encoders, bool edge, bool frame = false) {
+    ReproduceArm a;
+    a.id = ArmId(variant, z, seed, frame);
+    a.variant = variant;
+    a.latent_dim = z;
+    a.seed = seed;
+    a.set = EpisodeSetName(pipeline::FindVariant(variant)->raw_modalities);
+    a.encoders = encoders;
+    a.edge = edge;
+    a.frame_split = frame;
+    plan.arms.push_back(a);
+  };
+  // Stage-1 arms of every seed first, so that the farm can start the arms
+  // that reuse them once they are done.
+  for (int s = 1; s <= plan.seeds; ++s) {
+    const auto seed = static_cast<std::uint64_t>(s);
+    for (const char* v : {"paper", "raw"})
+      for (int z : plan.latent_dims) arm(v, z, seed, "", z == z0);
+    for (int z : plan.latent_dims) arm("mlp_bottleneck", z, seed, "", false);
+    arm("paper", z0, seed, "", true, true);
+    arm("raw_camera", z0, seed, "", true);
+    arm("raw_lidar_radar", z0, seed, "", true);
+  }
+  for (int s = 1; s <= plan.seeds; ++s) {
+    const auto seed = static_cast<std::uint64_t>(s);
+    for (const char* base : {"paper", "raw"})
+      for (const std::string& v : OnEncodersOf(base)) arm(v, z0, seed, ArmId(base, z0, seed), true);
+  }
+  return plan;
+}
+
+ReproduceOutcome RunReproduce(const Scenario& base, const ReproduceOptions& o) {
+  const auto started = std::chrono::steady_clock::now();
+  const std::string started_utc = UtcNow();
+  if (o.jobs < 1) throw core::UsageError("uavsim reproduce: --jobs needs at least 1");
+  const ReproducePlan plan = MakeReproducePlan(base, o);
+  if (plan.episodes.episodes < 3)
+    throw core::UsageError("uavsim reproduce: --episodes needs at least 3");
+  ReproduceOutcome out;
+  out.arms = plan.arms.size();
+  const std::string dir = fs::absolute(o.out_dir).string();
+
+  std::unique_ptr<boost::mpi::environment> env;
+  std::unique_ptr<boost::mpi::communicator> world;
+  if (UnderMpirun()) {
+    env = std::make_unique<boost::mpi::environment>();
+    world = std::make_unique<boost::mpi::communicator>();
+  }
+  const bool coordinator = !world || world->rank() == 0;
+
+  // 1. The episode sets, each simulated once (every rank its share). Rank 0
+  // locks DIR as it first prepares it, to the end.
+  std::optional<core::FileLock> lock;
+  std::map<std::string, std::vector<pipeline::Episode>> sets;
+  for (const std::string& set : SetsOf(plan)) {
+    Scenario s = base;
+    pipeline::Variant nodes{"", "", "", "{}", false, MaskOfSet(plan, set)};
+    ApplyVariantNodes(nodes, s);
+    EpisodePlan p = plan.episodes;
+    EpisodeRequest request;
+    request.episodes = p.episodes;
+    request.data_file = SetFile(dir, set);
+    request.jobs = o.jobs;
+    request.quiet = o.quiet;
+    request.command = "uavsim reproduce";
+    const std::string scratch = (fs::path(dir) / "episodes" / (set + ".partial")).string();
+    if (coordinator && !o.quiet)
+      std::cerr << "uavsim reproduce: episode set " << set << " (" << p.episodes << " of "
+                << p.episode_s << " s)\n";
+    request.wait = o.wait;
+    std::optional<std::vector<pipeline::Episode>> e = GatherEpisodes(
+        s, p, request,
+        [&] {
+          PrepareDir(dir, PlanRecord(base, plan, o.quick));
+          if (!lock) lock.emplace(dir + "/.lock", "uavsim reproduce: " + dir, o.wait);
+        },
+        [&] {
+          std::error_code ec;
+          fs::remove_all(scratch, ec);
+          return scratch;
+        },
+        world.get());
+    if (e) sets[set] = std::move(*e);
+  }
+
+  // 2. The trainings, stage-1 arms first.
+  const auto episodes_of = [&](const std::string& set) -> const std::vector<pipeline::Episode>& {
+    auto it = sets.find(set);
+    if (it == sets.end())  // a rank other than 0: from DIR (a shared file system)
+      it = sets.emplace(set, pipeline::ReadEpisodes(SetFile(dir, set), core::ThrowIfInterrupted))
+               .first;
+    return it->second;
+  };
+  ProcessFarm farm;
+  farm.command = "uavsim reproduce";
+  farm.unit = "trainings";
+  farm.run = [&](std::size_t i, const std::string& model_dir) {
+    const ReproduceArm& a = plan.arms[i];
+    const pipeline::Variant& v = *pipeline::FindVariant(a.variant);
+    const Scenario s = ArmScenario(base, a);
+    TrainCommand c;
+    c.out_dir = model_dir;
+    c.quiet = true;
+    c.seed = a.seed;
+    c.data_seed = plan.episodes.seed;
+    c.variant = a.variant;
+    c.mlp_bottleneck = v.mlp_bottleneck;
+    c.encoders_dir = a.encoders.empty() ? "" : ModelDir(dir, a.encoders);
+    c.paper_head = a.edge;
+    c.anchored_head = false;
+    c.score_classical = false;
+    c.split = a.frame_split ? pipeline::DataSplit::kFrame : pipeline::DataSplit::kTrajectory;
+    c.training = pipeline::ApplyVariant(v, plan.training);
+    c.command_line = o.command_line + " (training " + a.id + ")";
+    pipeline::InitTorch(1, a.seed);
+    TrainOnEpisodes(s, c, episodes_of(a.set), plan.episodes);
+  };
+  farm.describe = [&](std::size_t i) { return "training " + plan.arms[i].id; };
+  farm.local_dir = [&](std::size_t i) { return ModelDir(dir, plan.arms[i].id); };
+  farm.commit_remote = [&](std::size_t i, const TaskFiles& files) {
+    results::RunDirectory run(ModelDir(dir, plan.arms[i].id), false);
+    for (const auto& [path, bytes] : files) run.WriteText(path, bytes);
+    run.Commit();
+  };
+  FarmOptions fo;
+  fo.jobs = o.jobs;
+  fo.quiet = o.quiet;
+  fo.label = "reproduce " + base.name;
+  const auto add = [&out](const FarmCounts& c) {
+    out.ran += c.ran;
+    out.failed += c.failed;
+  };
+  const auto wall = [&] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  };
+  try {
+    // Two rounds: the arms that train stage 1, then those that reuse them.
+    for (const bool reuse : {false, true}) {
+      if (!coordinator) {
+        if (world) world->barrier();
+        add(RunFarmWorker(*world, farm, fo));
+        continue;
+      }
+      std::deque<std::size_t> queue;
+      for (std::size_t i = 0; i < plan.arms.size(); ++i) {
+        const ReproduceArm& a = plan.arms[i];
+        if (a.encoders.empty() == reuse) continue;
+        if (ArmDone(dir, a.id)) {
+          ++out.already_done;
+          continue;
+        }
+        if (reuse && !ArmDone(dir, a.encoders)) continue;  // its encoders failed: counted below
+        queue.push_back(i);
+      }
+      if (world) {
+        world->barrier();
+        add(RunFarmCoordinator(*world, farm, std::move(queue), fo));
+      } else {
+        add(RunFarmLocal(farm, std::move(queue), fo));
+      }
+    }
+  } catch (const core::Interrupted&) {
+    if (coordinator) LogInvocation(dir, started_utc, wall(), o.jobs, out.ran, "interrupted");
+    if (world) {
+      std::cerr << "uavsim: interrupted; finished trainings are kept\n";
+      world->abort(130);
+    }
+    throw;
+  }
+  if (!coordinator) {
+    out.mpi_worker = true;
+    return out;
+  }
+  std::size_t missing = 0;
+  for (const ReproduceArm& a : plan.arms) missing += !ArmDone(dir, a.id);
+  out.failed = std::max(out.failed, missing);
+  if (out.failed > 0) {
+    out.wall_s = wall();
+    LogInvocation(dir, started_utc, out.wall_s, o.jobs, out.ran, "failed");
+    return out;
+  }
+
+  // 3. Tab. II's runs, then every artefact and the report.
+  RunDataRates(base, plan, dir, o.quiet);
+  out.wall_s = wall();
+  LogInvocation(dir, started_utc, out.wall_s, o.jobs, out.ran, "reported");
+  ReproduceReportInputs in;
+  in.dir = dir;
+  in.scenario = &base;
+  in.plan = &plan;
+  in.quick = o.quick;
+  in.command_line = o.command_line;
+  in.trained_now = out.ran;
+  out.warnings = WriteReproduceReport(in);
+  out.reported = true;
+  return out;
+}
+
+}  // namespace uavsim::sim

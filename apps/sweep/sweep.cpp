@@ -1,0 +1,331 @@
+#include "apps/sweep/sweep.h"
+
+#include <signal.h>
+#include <unistd.h>
+
+#include <boost/mpi/communicator.hpp>
+#include <boost/mpi/environment.hpp>
+#include <cerrno>
+#include <cstdio>
+#include <cstdlib>
+#include <deque>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <optional>
+#include <set>
+#include <sstream>
+
+#include "results/run_directory.h"
+#include "core/error.h"
+#include "core/file_lock.h"
+#include "core/progress.h"
+#include "apps/sweep/process_farm.h"
+#include "sim/run.h"
+
+namespace uavsim::sim {
+namespace {
+
+namespace fs = std::filesystem;
+using core::Json;
+
+constexpr const char* kFormat = "uavsim-sweep/1";
+
+// ---------------------------------------------------------------------------
+// DIR/sweep.json: the expanded grid, what tables and plots need.
+
+Json SweepRecord(const SweepSpec& spec) {
+  Json r = Json::object();
+  r["format"] = kFormat;
+  r["name"] = spec.name;
+  r["spec"] = spec.canonical;
+  Json params = Json::array();
+  for (const results::SweepParameter& p : spec.TableParameters())
+    params.push_back({{"name", p.name}, {"labels", p.labels}});
+  r["parameters"] = params;
+  Json axes = Json::array();
+  for (const results::SweepAxis& a : spec.Axes()) {
+    Json xs = Json::array();
+    for (const auto& [i, x] : a.x_of_value) xs.push_back({i, x});
+    axes.push_back({{"stem", a.stem},
+                    {"x_label", a.x_label},
+                    {"parameter", a.parameter},
+                    {"x_of_value", xs},
+                    {"log_x", a.log_x}});
+  }
+  r["axes"] = axes;
+  Json points = Json::array();
+  for (const SweepPointSpec& p : spec.points)
+    points.push_back({{"id", p.id}, {"values", p.value_index}, {"seed", p.seed}});
+  r["points"] = points;
+  return r;
+}
+
+// The report's inputs from sweep.json (points' metrics read separately).
+results::SweepReportInputs ReportLayout(const Json& r, const std::string& where) {
+  results::SweepReportInputs in;
+  try {
+    in.title = r.at("name").get<std::string>();
+    for (const Json& p : r.at("parameters"))
+      in.parameters.push_back(
+          {p.at("name").get<std::string>(), p.at("labels").get<std::vector<std::string>>()});
+    for (const Json& a : r.at("axes")) {
+      results::SweepAxis axis;
+      axis.stem = a.at("stem").get<std::string>();
+      axis.x_label = a.at("x_label").get<std::string>();
+      axis.parameter = a.at("parameter").get<int>();
+      for (const Json& xv : a.at("x_of_value"))
+        axis.x_of_value.emplace_back(xv.at(0).get<int>(), xv.at(1).get<double>());
+      axis.log_x = a.at("log_x").get<bool>();
+      in.axes.push_back(std::move(axis));
+    }
+    for (const Json& p : r.at("points")) {
+      results::SweepPoint pt;
+      pt.id = p.at("id").get<std::string>();
+      pt.value_index = p.at("values").get<std::vector<int>>();
+      pt.seed = p.at("seed").get<std::uint64_t>();
+      in.points.push_back(std::move(pt));
+    }
+  } catch (const Json::exception& e) {
+    throw core::UsageError(where + ": not a sweep record of this uavsim version (" + e.what() +
+                           ")");
+  }
+  return in;
+}
+
+std::string PointDir(const std::string& dir, const std::string& id) {
+  return (fs::path(dir) / "points" / id).string();
+}
+
+bool PointDone(const std::string& dir, const std::string& id) {
+  std::error_code ec;
+  return fs::is_regular_file(fs::path(PointDir(dir, id)) / "metrics.json", ec);
+}
+
+// Creates DIR (and DIR/points) for `record`, or checks that an existing DIR
+// holds the same sweep.
+void PrepareDir(const std::string& dir, const Json& record) {
+  results::RemoveStaleStaging(dir);  // what killed commands left beside it, of any name
+  const fs::path file = fs::path(dir) / "sweep.json";
+  std::error_code ec;
+  if (fs::exists(file, ec)) {
+    Json old;
+    try {
+      old = Json::parse(core::ReadFileBytes(file.string()));
+    } catch (const Json::exception&) {
+      throw core::UsageError(file.string() + ": unreadable; remove " + dir +
+                             " or choose another --out");
+    }
+    if (old != record)
+      throw core::UsageError(dir +
+                             ": holds another sweep (its spec, base scenario or grid differ); "
+                             "choose another --out or remove it");
+    return;
+  }
+  if (fs::exists(dir, ec) && !fs::is_empty(dir, ec))
+    throw core::UsageError(dir + ": exists and is not a sweep; choose another --out");
+  fs::create_directories(fs::path(dir) / "points", ec);
+  if (ec) throw std::runtime_error(dir + ": cannot create folder: " + ec.message());
+  results::WriteFileAtomic(file.string(), record.dump(2) + "\n");
+}
+
+// The lock of a sweep's folder, a shard's own (the shards of one grid run
+// side by side: their points differ).
+std::string LockPath(const SweepOptions& o) {
+  const std::string name = o.shard_count == 1 ? ".lock"
+                                              : ".lock-shard-" + std::to_string(o.shard_index) +
+                                                    "-of-" + std::to_string(o.shard_count);
+  return (fs::path(o.out_dir) / name).string();
+}
+
+// Removes the staging folders ".ID.partial-PID" of points killed mid-way
+// (those whose process is gone), among the points this invocation runs:
+// another shard's points may be in the making on another host.
+void RemoveStalePartials(const std::string& dir, const std::set<std::string>& ours) {
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(fs::path(dir) / "points", ec)) {
+    std::string id;
+    const auto pid = results::StagingOwner(e.path().filename().string(), &id);
+    if (!pid || !ours.count(id) || results::ProcessAlive(*pid)) continue;
+    std::error_code rm;
+    fs::remove_all(e.path(), rm);
+  }
+}
+
+// Points this invocation should run: its shard, not yet done.
+std::deque<std::size_t> PointsToRun(const SweepSpec& spec, const SweepOptions& o,
+                                    SweepOutcome& out) {
+  std::deque<std::size_t> queue;
+  for (std::size_t i = 0; i < spec.points.size(); ++i) {
+    if (PointDone(o.out_dir, spec.points[i].id)) {
+      ++out.already_done;
+      continue;
+    }
+    if (static_cast<int>(i % static_cast<std::size_t>(o.shard_count)) == o.shard_index)
+      queue.push_back(i);
+  }
+  return queue;
+}
+
+// The ids of this invocation's shard.
+std::set<std::string> ShardIds(const SweepSpec& spec, const SweepOptions& o) {
+  std::set<std::string> ids;
+  for (std::size_t i = 0; i < spec.points.size(); ++i)
+    if (static_cast<int>(i % static_cast<std::size_t>(o.shard_count)) == o.shard_index)
+      ids.insert(spec.points[i].id);
+  return ids;
+}
+
+// Rank 0 writes a worker's point all-or-nothing, as a run would.
+void CommitPoint(const std::string& dir, const std::string& id, const TaskFiles& files) {
+  results::RunDirectory run(PointDir(dir, id), false);
+  for (const auto& [path, bytes] : files) run.WriteText(path, bytes);
+  run.Commit();
+}
+
+// Each point is a whole run directory: DIR/points/<id> when rank 0 runs it.
+ProcessFarm PointFarm(const SweepSpec& spec, const std::string& dir) {
+  ProcessFarm farm;
+  farm.command = "uavsim sweep";
+  farm.unit = "points";
+  farm.run = [&spec](std::size_t i, const std::string& run_dir) {
+    RunOptions o;
+    o.out_dir = run_dir;
+    o.quiet = true;
+    o.report = false;  // the sweep's report is the product; a point's is drawn on demand
+    o.scenario_file = spec.file + "#" + spec.points[i].id;
+    RunScenario(spec.PointScenario(i), o);
+  };
+  farm.describe = [&spec](std::size_t i) { return "point " + spec.points[i].id; };
+  farm.local_dir = [&spec, dir](std::size_t i) { return PointDir(dir, spec.points[i].id); };
+  farm.commit_remote = [&spec, dir](std::size_t i, const TaskFiles& files) {
+    CommitPoint(dir, spec.points[i].id, files);
+  };
+  return farm;
+}
+
+}  // namespace
+
+SweepOutcome MergeSweep(const std::string& dir) {
+  const fs::path file = fs::path(dir) / "sweep.json";
+  std::error_code ec;
+  if (!fs::is_regular_file(file, ec))
+    throw core::UsageError(dir + ": not a sweep folder (no sweep.json)");
+  Json record;
+  try {
+    record = Json::parse(core::ReadFileBytes(file.string()));
+  } catch (const Json::exception& e) {
+    throw core::UsageError(file.string() + ": unreadable: " + e.what());
+  }
+  if (record.value("format", "") != kFormat)
+    throw core::UsageError(file.string() + ": not a " + std::string(kFormat) + " record");
+  results::SweepReportInputs in = ReportLayout(record, file.string());
+  SweepOutcome out;
+  out.points = in.points.size();
+  std::vector<std::string> missing;
+  for (const results::SweepPoint& p : in.points)
+    if (!PointDone(dir, p.id)) missing.push_back(p.id);
+  if (!missing.empty()) {
+    std::string list;
+    for (std::size_t i = 0; i < missing.size() && i < 5; ++i) list += (i ? ", " : "") + missing[i];
+    if (missing.size() > 5) list += ", ...";
+    throw core::UsageError(dir + ": " + std::to_string(missing.size()) + " of " +
+                           std::to_string(out.points) + " points not finished (" + list +
+                           "); run the remaining shards, or the sweep again, first");
+  }
+  for (results::SweepPoint& p : in.points) {
+    const fs::path run(PointDir(dir, p.id));
+    p.metrics = core::LoadJsonFile((run / "metrics.json").string());
+    std::error_code e2;
+    if (fs::is_regular_file(run / "rate_snr.csv", e2))
+      p.rate_snr_csv = core::ReadFileBytes((run / "rate_snr.csv").string());
+  }
+  out.already_done = out.points;
+  out.warnings = results::WriteSweepReport(dir, in);
+  out.reported = true;
+  return out;
+}
+
+SweepOutcome RunSweep(const SweepSpec& spec, const SweepOptions& o) {
+  if (o.jobs < 1) throw core::UsageError("uavsim sweep: --jobs needs at least 1");
+  if (o.shard_count < 1 || o.shard_index < 0 || o.shard_index >= o.shard_count)
+    throw core::UsageError("uavsim sweep: --shard I/N needs 0 <= I < N");
+  SweepOutcome out;
+  out.points = spec.points.size();
+  const Json record = SweepRecord(spec);
+
+  std::unique_ptr<boost::mpi::environment> env;
+  std::unique_ptr<boost::mpi::communicator> world;
+  if (UnderMpirun()) {
+    env = std::make_unique<boost::mpi::environment>();
+    world = std::make_unique<boost::mpi::communicator>();
+    out.ranks = world->size();
+  }
+  const bool coordinator = !world || world->rank() == 0;
+  const ProcessFarm farm = PointFarm(spec, o.out_dir);
+  FarmOptions fo;
+  fo.jobs = o.jobs;
+  fo.quiet = o.quiet;
+  fo.label = "sweep " + spec.name;
+  const auto add = [&out](const FarmCounts& c) {
+    out.ran += c.ran;
+    out.failed += c.failed;
+  };
+  std::optional<core::FileLock> lock;  // held to the end, the merge included
+  try {
+    if (!coordinator) {
+      out.mpi_worker = true;
+      world->barrier();  // rank 0 has prepared DIR
+      add(RunFarmWorker(*world, farm, fo));
+      return out;
+    }
+    std::deque<std::size_t> queue;
+    if (world) {
+      // Rank 0 prepares DIR; the others wait, and learn whether it could.
+      int ok = 0;
+      std::string error;
+      try {
+        PrepareDir(o.out_dir, record);
+        lock.emplace(LockPath(o), "uavsim sweep: " + o.out_dir, o.wait);
+        RemoveStalePartials(o.out_dir, ShardIds(spec, o));
+        queue = PointsToRun(spec, o, out);
+        ok = 1;
+      } catch (const std::exception& e) {
+        error = e.what();
+      }
+      if (!ok) {
+        std::cerr << error << "\n";
+        world->abort(2);
+      }
+      world->barrier();
+      add(RunFarmCoordinator(*world, farm, std::move(queue), fo));
+    } else {
+      PrepareDir(o.out_dir, record);
+      lock.emplace(LockPath(o), "uavsim sweep: " + o.out_dir, o.wait);
+      RemoveStalePartials(o.out_dir, ShardIds(spec, o));
+      queue = PointsToRun(spec, o, out);
+      add(RunFarmLocal(farm, std::move(queue), fo));
+    }
+  } catch (const core::Interrupted&) {
+    // Finished points are committed; under MPI the other ranks stop too.
+    if (world) {
+      std::cerr << "uavsim: interrupted; finished points are kept\n";
+      world->abort(130);
+    }
+    throw;
+  }
+  for (const SweepPointSpec& p : spec.points)
+    if (!PointDone(o.out_dir, p.id)) ++out.missing;
+  out.missing -= std::min(out.missing, out.failed);  // the rest: other shards' points
+  RemoveStalePartials(o.out_dir, ShardIds(spec, o));
+  if (out.missing == 0 && out.failed == 0) {
+    const SweepOutcome merged = MergeSweep(o.out_dir);
+    out.warnings = merged.warnings;
+    out.reported = true;
+  }
+  return out;
+}
+
+}  // namespace uavsim::sim
