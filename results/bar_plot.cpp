@@ -12,13 +12,14 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
-#include <sstream>
+#include <ostream>
 #include <string>
 #include <vector>
 
 #include "results/csv.h"
 #include "results/figure_style.h"
 #include "results/gnuplot.h"
+#include "results/gnuplot_figure.h"
 
 namespace uavsim::results {
 namespace {
@@ -33,12 +34,10 @@ constexpr int kRightPx = 20;       // right of the plot
 constexpr int kTopPx = 16;         // above the plot without a title
 constexpr int kTitleLinePx = 22;   // a line of the title (sans 14)
 constexpr int kTitleCharPx = 9;    // a character of the title, roughly
-constexpr int kCharPx = 8;         // a character of a legend entry, roughly
 constexpr int kTicCharPx = 9;      // a character of an x tic label, generously ('+' is wide)
 constexpr int kLinePx = 18;        // a line of a tic label
 constexpr int kTicGapPx = 10;      // between the axis and its tic labels
 constexpr int kXLabelPx = 26;      // the x label's line
-constexpr int kKeyRowPx = 22;      // a row of the legend
 constexpr int kMinPlotPx = 100;    // the plot area at least, either way
 constexpr double kTurnDeg = 45.0;  // turned x tic labels
 constexpr double kPi = 3.14159265358979323846;
@@ -56,13 +55,6 @@ struct Bar {
   double ci = 0.0;  // 0: no whisker
 };
 
-// The pixel offsets as a screen coordinate ("at screen f").
-struct Canvas {
-  int width = 0, height = 0;
-  std::string X(double px) const { return ShortestNumber(px / width); }
-  std::string Y(double px_from_top) const { return ShortestNumber(1.0 - px_from_top / height); }
-};
-
 // The colour and fill of series number `series`: hatched after ten.
 std::string BoxStyle(std::size_t series) {
   std::string s = "lc rgb '" + std::string(kSeriesColours[series % kSeriesColourCount]) + "' fs ";
@@ -73,21 +65,34 @@ std::string BoxStyle(std::size_t series) {
   return s + " border lc rgb '" + kEdgeColour + "'";
 }
 
-}  // namespace
+// Bars as read: one list per series, with the categories and series names
+// in first-seen order.
+struct Bars {
+  std::vector<std::string> categories, series_names;
+  std::vector<std::vector<Bar>> by_series;  // by series index
+  // Series with a bar somewhere, in first-seen order: the slots of a group.
+  std::vector<std::size_t> shown;
+};
 
-std::string PlotBars(const std::string& csv_path, const BarPlotSpec& spec) {
-  const std::string where = "bar plot " + csv_path + ": ";
-  if (spec.width_px < kMinWidthPx || spec.height_px < kMinHeightPx || spec.width_px > kMaxImagePx ||
-      spec.height_px > kMaxImagePx)
-    return where + "the image must be at least " + std::to_string(kMinWidthPx) + " x " +
-           std::to_string(kMinHeightPx) + " and at most " + std::to_string(kMaxImagePx) + " x " +
-           std::to_string(kMaxImagePx) + " pixels";
-  const std::string png =
-      spec.png_path.empty() ? fs::path(csv_path).replace_extension(".png").string() : spec.png_path;
+bool HasWhisker(const std::vector<Bar>& bars) {
+  return std::any_of(bars.begin(), bars.end(), [](const Bar& b) { return b.ci > 0.0; });
+}
 
-  // ---- Read and check the CSV.
-  CsvFile csv;
-  if (std::string err = ReadCsvFile(csv_path, &csv); !err.empty()) return where + err;
+// The y and ci95 cells of a row into `bar`: "" or why not (after `at`).
+std::string ParseBarValues(const std::string& y_cell, const std::string& ci_cell,
+                           const BarPlotSpec& spec, const std::string& at, Bar* bar) {
+  if (!y_cell.empty() && !ParseFiniteNumber(y_cell, &bar->y))
+    return at + "expected an empty cell or a finite number in \"" + spec.y_column + "\"";
+  if (!ci_cell.empty() && (!ParseFiniteNumber(ci_cell, &bar->ci) || bar->ci < 0.0))
+    return at + "expected an empty cell or a finite number >= 0 in \"" + spec.ci95_column + "\"";
+  if (spec.log_y && !y_cell.empty() && bar->y <= 0.0)
+    return at + "y must be > 0 on a logarithmic axis";
+  return "";
+}
+
+// The bars of `csv` into `out`: "" or why not (after `where`).
+std::string ReadBars(const CsvFile& csv, const BarPlotSpec& spec, const std::string& where,
+                     Bars* out) {
   const std::string* names[4] = {&spec.category_column, &spec.series_column, &spec.y_column,
                                  &spec.ci95_column};
   long col[4];
@@ -95,9 +100,9 @@ std::string PlotBars(const std::string& csv_path, const BarPlotSpec& spec) {
     col[k] = csv.Column(*names[k]);
     if (col[k] < 0) return where + "no column \"" + *names[k] + "\"";
   }
-
-  std::vector<std::string> categories, series_names;
-  std::vector<std::vector<Bar>> bars;  // by series index
+  auto& categories = out->categories;
+  auto& series_names = out->series_names;
+  auto& bars = out->by_series;
   // The line of each (category, series) row seen, to refuse a second one.
   std::vector<std::vector<std::size_t>> line_of;
   std::size_t drawn = 0;
@@ -106,12 +111,7 @@ std::string PlotBars(const std::string& csv_path, const BarPlotSpec& spec) {
     const std::string at = where + "line " + std::to_string(csv.line[r]) + ": ";
     Bar bar;
     const std::string &y_cell = cells[col[2]], &ci_cell = cells[col[3]];
-    if (!y_cell.empty() && !ParseFiniteNumber(y_cell, &bar.y))
-      return at + "expected an empty cell or a finite number in \"" + spec.y_column + "\"";
-    if (!ci_cell.empty() && (!ParseFiniteNumber(ci_cell, &bar.ci) || bar.ci < 0.0))
-      return at + "expected an empty cell or a finite number >= 0 in \"" + spec.ci95_column + "\"";
-    if (spec.log_y && !y_cell.empty() && bar.y <= 0.0)
-      return at + "y must be > 0 on a logarithmic axis";
+    if (std::string err = ParseBarValues(y_cell, ci_cell, spec, at, &bar); !err.empty()) return err;
 
     const std::string &category = cells[col[0]], &series = cells[col[1]];
     bar.category = static_cast<std::size_t>(
@@ -134,19 +134,22 @@ std::string PlotBars(const std::string& csv_path, const BarPlotSpec& spec) {
     ++drawn;
   }
   if (drawn == 0) return where + "no bar to draw (every \"" + spec.y_column + "\" cell is empty)";
-
-  // Series with a bar somewhere, in first-seen order: the slots of a group.
-  std::vector<std::size_t> shown;
   for (std::size_t s = 0; s < bars.size(); ++s)
-    if (!bars[s].empty()) shown.push_back(s);
-  const std::size_t n_series = shown.size();
-  const int n_categories = static_cast<int>(categories.size());
+    if (!bars[s].empty()) out->shown.push_back(s);
+  return "";
+}
 
-  // ---- The y range: the bars, their whiskers and (on a linear axis from
-  // zero) the bars' foot at 0.
+struct YRange {
+  double lo = 0.0, hi = 0.0;
+  bool any_whisker = false;  // some bar has a whisker
+};
+
+// The y range: the bars, their whiskers and (on a linear axis from zero) the
+// bars' foot at 0.
+YRange BarYRange(const Bars& bars, const BarPlotSpec& spec) {
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   bool any_whisker = false;
-  for (const auto& series : bars)
+  for (const auto& series : bars.by_series)
     for (const Bar& b : series) {
       any_whisker = any_whisker || b.ci > 0.0;
       hi = std::max(hi, b.y + b.ci);
@@ -163,21 +166,35 @@ std::string PlotBars(const std::string& csv_path, const BarPlotSpec& spec) {
     y_lo = from_zero && lo == 0.0 ? 0.0 : lo - pad;
     y_hi = from_zero && hi == 0.0 ? 0.0 : hi + pad;
   }
+  return {y_lo, y_hi, any_whisker};
+}
 
-  // ---- Layout, from the top: the title, the plot, the x tic labels, the x
-  // label, the legend.
-  Canvas canvas{spec.width_px, spec.height_px};
-  const std::vector<std::string> title_lines =
-      WrapWords(spec.title, (canvas.width - 24) / kTitleCharPx);
-  const int top_px =
-      title_lines.empty() ? kTopPx : 12 + static_cast<int>(title_lines.size()) * kTitleLinePx + 14;
+// The layout in pixels, from the top: the title, the plot, the x tic labels,
+// the x label, the legend.
+struct BarLayout {
+  ScreenCoordinates screen;
+  std::vector<std::string> title_lines;
+  int top_px = 0;            // the plot's top
+  int longest_category = 0;  // characters
+  int left_px = kLeftPx;     // the plot's left
+  double group_px = 0.0;     // a category's width
+  bool turned = false;       // the x tic labels turned by kTurnDeg
+  int tics_px = 0;           // the x tic labels' height
+  int x_label_px = 0;
+  LegendStrip legend;
+  int plot_bottom_px = 0, plot_width_px = 0;
+};
+
+// Level tic labels while the longest fits its group, else turned; a turned
+// label hangs left of its tic, so the plot moves right until the first ones
+// stay in the image.
+void LayOutTicLabels(const std::vector<std::string>& categories, BarLayout* l) {
+  const int n_categories = static_cast<int>(categories.size());
+  const int width = l->screen.width_px;
   int longest_category = 0;
   for (const auto& c : categories) longest_category = std::max(longest_category, Utf8Chars(c));
-  // Level tic labels while the longest fits its group, else turned; a
-  // turned label hangs left of its tic, so the plot moves right until the
-  // first ones stay in the image.
   int left_px = kLeftPx;
-  double group_px = static_cast<double>(canvas.width - left_px - kRightPx) / n_categories;
+  double group_px = static_cast<double>(width - left_px - kRightPx) / n_categories;
   const bool turned = longest_category * kTicCharPx + 12 > group_px;
   const double cos_t = std::cos(kTurnDeg * kPi / 180.0), sin_t = std::sin(kTurnDeg * kPi / 180.0);
   if (turned)
@@ -187,133 +204,185 @@ std::string PlotBars(const std::string& csv_path, const BarPlotSpec& spec) {
         overhang = std::max(overhang, Utf8Chars(categories[k]) * kTicCharPx * cos_t +
                                           kLinePx * sin_t - (k + 0.5) * group_px + 4.0);
       left_px = std::max(kLeftPx, static_cast<int>(std::ceil(overhang)));
-      group_px = static_cast<double>(canvas.width - left_px - kRightPx) / n_categories;
+      group_px = static_cast<double>(width - left_px - kRightPx) / n_categories;
     }
-  const int tics_px =
+  l->longest_category = longest_category;
+  l->left_px = left_px;
+  l->group_px = group_px;
+  l->turned = turned;
+  l->tics_px =
       turned
           ? static_cast<int>(std::ceil(longest_category * kTicCharPx * sin_t + kLinePx * cos_t)) +
                 kTicGapPx
           : kLinePx + kTicGapPx;
-  const int x_label_px = spec.x_label.empty() ? 0 : kXLabelPx;
-  const std::size_t entries = n_series + (any_whisker ? 1 : 0);
-  int longest_entry = any_whisker ? Utf8Chars(spec.error_bar_label) : 0;
-  for (std::size_t s : shown) longest_entry = std::max(longest_entry, Utf8Chars(series_names[s]));
-  const int entry_px = kCharPx * longest_entry + 60;
-  const int per_row = std::clamp((canvas.width - 40) / entry_px, 1, static_cast<int>(entries));
-  const int key_rows = (static_cast<int>(entries) + per_row - 1) / per_row;
-  const int key_px = 14 + (spec.legend_title.empty() ? 0 : kKeyRowPx) + key_rows * kKeyRowPx;
-  const int plot_bottom_px = canvas.height - key_px - x_label_px - tics_px - 8;
-  const int plot_width_px = canvas.width - left_px - kRightPx;
-  if (plot_bottom_px - top_px < kMinPlotPx || plot_width_px < kMinPlotPx)
-    return where + "a " + std::to_string(canvas.width) + " x " + std::to_string(canvas.height) +
-           " image leaves no room for the bars beside their labels and legend (" +
-           std::to_string(n_categories) + " categories, the longest of " +
-           std::to_string(longest_category) + " characters, " + std::to_string(n_series) +
-           " series): make it larger";
+}
 
-  // ---- The script. Texts through variables: `title`, `set label` and the
-  // tic list take string expressions there.
-  std::ostringstream gp;
-  gp << "uavsim_title = " << GnuplotLines(title_lines) << "\n"
-     << "uavsim_xlabel = " << GnuplotString(spec.x_label) << "\n"
-     << "uavsim_ylabel = " << GnuplotString(spec.y_label) << "\n"
-     << "uavsim_key = " << GnuplotString(spec.legend_title) << "\n"
-     << "uavsim_ci = " << GnuplotString(spec.error_bar_label) << "\n";
-  for (int k = 0; k < n_categories; ++k)
-    gp << "uavsim_category" << k << " = " << GnuplotString(categories[k]) << "\n";
-  for (std::size_t s : shown)
-    gp << "uavsim_series" << s << " = " << GnuplotString(series_names[s]) << "\n";
-  gp << "set datafile separator whitespace\n";
-  // Per series: its bars (category index, y) and its whiskers (category
-  // index, y, bottom, top; the bottom raised to the axis on a logarithmic
-  // axis, where y - ci95 may be <= 0).
-  for (std::size_t s : shown) {
-    gp << "$bars" << s << " << EOD\n";
-    for (const Bar& b : bars[s]) gp << b.category << " " << ShortestNumber(b.y) << "\n";
-    gp << "EOD\n";
-    if (std::none_of(bars[s].begin(), bars[s].end(), [](const Bar& b) { return b.ci > 0.0; }))
-      continue;
-    gp << "$whiskers" << s << " << EOD\n";
-    for (const Bar& b : bars[s]) {
+// The layout of `bars` as `spec` says into `l`: "" or why it does not fit.
+std::string LayOutBars(const Bars& bars, const BarPlotSpec& spec, bool any_whisker, BarLayout* l) {
+  l->screen = {spec.width_px, spec.height_px};
+  const ScreenCoordinates& screen = l->screen;
+  l->title_lines = WrapWords(spec.title, (screen.width_px - 24) / kTitleCharPx);
+  l->top_px = l->title_lines.empty()
+                  ? kTopPx
+                  : 12 + static_cast<int>(l->title_lines.size()) * kTitleLinePx + 14;
+  LayOutTicLabels(bars.categories, l);
+  l->x_label_px = spec.x_label.empty() ? 0 : kXLabelPx;
+  std::vector<std::string> entries;
+  for (std::size_t s : bars.shown) entries.push_back(bars.series_names[s]);
+  if (any_whisker) entries.push_back(spec.error_bar_label);
+  l->legend = SizeLegendStrip(screen.width_px, entries, 60, 14, !spec.legend_title.empty());
+  l->plot_bottom_px = screen.height_px - l->legend.height_px - l->x_label_px - l->tics_px - 8;
+  l->plot_width_px = screen.width_px - l->left_px - kRightPx;
+  if (l->plot_bottom_px - l->top_px < kMinPlotPx || l->plot_width_px < kMinPlotPx)
+    return "a " + std::to_string(screen.width_px) + " x " + std::to_string(screen.height_px) +
+           " image leaves no room for the bars beside their labels and legend (" +
+           std::to_string(bars.categories.size()) + " categories, the longest of " +
+           std::to_string(l->longest_category) + " characters, " +
+           std::to_string(bars.shown.size()) + " series): make it larger";
+  return "";
+}
+
+// Texts through variables: `title`, `set label` and the tic list take string
+// expressions there.
+void WriteBarTexts(GnuplotFigure& figure, const Bars& bars, const BarPlotSpec& spec,
+                   const BarLayout& l) {
+  figure.TextLines("uavsim_title", l.title_lines);
+  figure.Text("uavsim_xlabel", spec.x_label);
+  figure.Text("uavsim_ylabel", spec.y_label);
+  figure.Text("uavsim_key", spec.legend_title);
+  figure.Text("uavsim_ci", spec.error_bar_label);
+  for (std::size_t k = 0; k < bars.categories.size(); ++k)
+    figure.Text("uavsim_category" + std::to_string(k), bars.categories[k]);
+  for (std::size_t s : bars.shown)
+    figure.Text("uavsim_series" + std::to_string(s), bars.series_names[s]);
+}
+
+// Per series: its bars (category index, y) and its whiskers (category index,
+// y, bottom, top; the bottom raised to the axis on a logarithmic axis, where
+// y - ci95 may be <= 0).
+void WriteBarData(GnuplotFigure& figure, const Bars& bars, const BarPlotSpec& spec, double y_lo) {
+  figure.Commands() << "set datafile separator whitespace\n";
+  for (std::size_t s : bars.shown) {
+    std::string rows;
+    for (const Bar& b : bars.by_series[s])
+      rows += std::to_string(b.category) + " " + ShortestNumber(b.y) + "\n";
+    figure.Data("bars" + std::to_string(s), rows);
+    if (!HasWhisker(bars.by_series[s])) continue;
+    std::string whiskers;
+    for (const Bar& b : bars.by_series[s]) {
       if (b.ci <= 0.0) continue;
       const double low = spec.log_y && b.y - b.ci <= y_lo ? y_lo : b.y - b.ci;
-      gp << b.category << " " << ShortestNumber(b.y) << " " << ShortestNumber(low) << " "
-         << ShortestNumber(b.y + b.ci) << "\n";
+      whiskers += std::to_string(b.category) + " " + ShortestNumber(b.y) + " " +
+                  ShortestNumber(low) + " " + ShortestNumber(b.y + b.ci) + "\n";
     }
-    gp << "EOD\n";
+    figure.Data("whiskers" + std::to_string(s), whiskers);
   }
+}
 
-  gp << "set multiplot" << (title_lines.empty() ? "" : " title uavsim_title font ',14'") << "\n"
-     << "unset key\n"
-     << "set lmargin at screen " << canvas.X(left_px) << "\n"
-     << "set rmargin at screen " << canvas.X(canvas.width - kRightPx) << "\n"
-     << "set tmargin at screen " << canvas.Y(top_px) << "\n"
-     << "set bmargin at screen " << canvas.Y(plot_bottom_px) << "\n"
-     << "set ylabel uavsim_ylabel\n"
+// The width of a bar's slot: groups one unit apart, the slots of a group side
+// by side about its centre.
+double SlotWidth(std::size_t n_series) {
+  const double group = n_series == 1 ? kLoneBarFill : kGroupFill;
+  return group / static_cast<double>(n_series);
+}
+
+// The plot area, the axes with their labels and ranges.
+void SetBarAxes(GnuplotFigure& figure, const Bars& bars, const BarPlotSpec& spec,
+                const BarLayout& l, const YRange& y) {
+  const ScreenCoordinates& screen = l.screen;
+  const int n_categories = static_cast<int>(bars.categories.size());
+  BeginMultiplot(figure, !l.title_lines.empty());
+  figure.PlotArea(screen, l.left_px, screen.width_px - kRightPx, l.top_px, l.plot_bottom_px);
+  std::ostream& gp = figure.Commands();
+  gp << "set ylabel uavsim_ylabel\n"
      << "set grid ytics back lt 1 lc rgb '#e3e3e3' lw 1\n"
      << "set border 3 lc rgb '#444444'\n"
      << "set ytics out nomirror\n"
      << "set xtics scale 0 nomirror"
-     << (turned ? " rotate by " + ShortestNumber(kTurnDeg) + " right" : std::string(" norotate"))
+     << (l.turned ? " rotate by " + ShortestNumber(kTurnDeg) + " right" : std::string(" norotate"))
      << " (";
   for (int k = 0; k < n_categories; ++k)
     gp << (k ? ", " : "") << "uavsim_category" << k << " " << k;
   gp << ")\n";
   if (!spec.x_label.empty())
-    gp << "set label 1 uavsim_xlabel at screen " << canvas.X(left_px + plot_width_px / 2.0)
-       << ", screen " << canvas.Y(plot_bottom_px + tics_px + x_label_px / 2.0) << " center\n";
+    gp << "set label 1 uavsim_xlabel at screen " << screen.X(l.left_px + l.plot_width_px / 2.0)
+       << ", screen " << screen.Y(l.plot_bottom_px + l.tics_px + l.x_label_px / 2.0) << " center\n";
   if (spec.log_y) gp << "set logscale y\n";
-  // Groups one unit apart, the slots of a group side by side about its
-  // centre.
-  const double group = n_series == 1 ? kLoneBarFill : kGroupFill;
-  const double slot = group / static_cast<double>(n_series);
   gp << "set xrange [-0.5:" << ShortestNumber(n_categories - 0.5) << "]\n"
-     << "set yrange [" << ShortestNumber(y_lo) << ":" << ShortestNumber(y_hi) << "]\n"
-     << "set boxwidth " << ShortestNumber(slot * kBoxFill) << " absolute\n";
-  // Whiskers as two-headed arrows with flat heads: "with yerrorbars" would
-  // leave a gap around the bar's top (gnuplot's point clearance).
-  const double cap_px = std::clamp(0.25 * slot * kBoxFill * group_px, 2.0, 6.0);
-  const std::string whisker = "with vectors heads size screen " + canvas.X(cap_px) +
-                              ",90 lc rgb '" + kEdgeColour + "' lw 1.5";
-  std::vector<std::string> boxes, whiskers;
+     << "set yrange [" << ShortestNumber(y.lo) << ":" << ShortestNumber(y.hi) << "]\n"
+     << "set boxwidth " << ShortestNumber(SlotWidth(bars.shown.size()) * kBoxFill) << " absolute\n";
+}
+
+// Whiskers as two-headed arrows with flat heads: "with yerrorbars" would
+// leave a gap around the bar's top (gnuplot's point clearance).
+std::string WhiskerStyle(const Bars& bars, const BarLayout& l) {
+  const double slot = SlotWidth(bars.shown.size());
+  const double cap_px = std::clamp(0.25 * slot * kBoxFill * l.group_px, 2.0, 6.0);
+  return "with vectors heads size screen " + l.screen.X(cap_px) + ",90 lc rgb '" + kEdgeColour +
+         "' lw 1.5";
+}
+
+// The boxes at their slots' offsets, then the whiskers, so that no
+// neighbouring box covers one.
+void PlotBarsAndWhiskers(GnuplotFigure& figure, const Bars& bars, const BarLayout& l) {
+  const std::size_t n_series = bars.shown.size();
+  const double slot = SlotWidth(n_series);
+  const std::string whisker = WhiskerStyle(bars, l);
+  std::vector<std::string> whiskers;
   for (std::size_t i = 0; i < n_series; ++i) {
-    const std::size_t s = shown[i];
+    const std::size_t s = bars.shown[i];
     const double offset = (static_cast<double>(i) - (n_series - 1) / 2.0) * slot;
     const std::string x = "($1+(" + ShortestNumber(offset) + "))";
-    boxes.push_back("$bars" + std::to_string(s) + " using " + x + ":2 with boxes " + BoxStyle(s) +
-                    " notitle");
-    if (std::any_of(bars[s].begin(), bars[s].end(), [](const Bar& b) { return b.ci > 0.0; }))
+    figure.Curve("$bars" + std::to_string(s) + " using " + x + ":2 with boxes " + BoxStyle(s) +
+                 " notitle");
+    if (HasWhisker(bars.by_series[s]))
       whiskers.push_back("$whiskers" + std::to_string(s) + " using " + x + ":3:(0):($4-$3) " +
                          whisker + " notitle");
   }
-  // Whiskers last, so that no neighbouring box covers one.
-  boxes.insert(boxes.end(), whiskers.begin(), whiskers.end());
-  gp << "plot ";
-  for (std::size_t i = 0; i < boxes.size(); ++i) gp << (i ? ", \\\n     " : "") << boxes[i];
-  gp << "\n";
+  for (const std::string& w : whiskers) figure.Curve(w);
+  figure.Plot();
+}
 
-  // The legend: undefined curves in the strip below the x label.
-  gp << "set lmargin at screen 0\nset rmargin at screen 1\n"
-     << "set tmargin at screen " << canvas.Y(canvas.height - key_px)
-     << "\nset bmargin at screen 0\n"
-     << "unset label 1\nunset xlabel\nunset ylabel\nunset logscale\nunset grid\nunset border\n"
-     << "unset tics\nset xrange [0:1]\nset yrange [0:1]\n"
-     << "set key center center horizontal Left reverse samplen 2 spacing 1.1 width 1 maxcols "
-     << per_row << (spec.legend_title.empty() ? "" : " title uavsim_key") << "\n"
-     << "plot ";
-  for (std::size_t i = 0; i < n_series; ++i)
-    gp << (i ? ", \\\n     " : "") << "NaN with boxes " << BoxStyle(shown[i])
-       << " title uavsim_series" << shown[i];
-  if (any_whisker) gp << ", \\\n     NaN " << whisker << " title uavsim_ci";
-  gp << "\nunset multiplot\n";
+// The legend: undefined curves in the strip below the x label.
+void PlotBarLegend(GnuplotFigure& figure, const Bars& bars, const BarPlotSpec& spec,
+                   const BarLayout& l, bool any_whisker) {
+  for (std::size_t s : bars.shown)
+    figure.Curve("NaN with boxes " + BoxStyle(s) + " title uavsim_series" + std::to_string(s));
+  if (any_whisker) figure.Curve("NaN " + WhiskerStyle(bars, l) + " title uavsim_ci");
+  PlotLegendStrip(figure, l.screen, l.screen.height_px - l.legend.height_px, "unset label 1\n", 2,
+                  l.legend, !spec.legend_title.empty());
+}
 
-  GnuplotImage image;
-  image.png_path = png;
-  image.width_px = canvas.width;
-  image.height_px = canvas.height;
-  image.font = "sans,11";
-  image.gnuplot = spec.gnuplot;
-  if (std::string failure = RunGnuplot(gp.str(), image); !failure.empty()) return where + failure;
+}  // namespace
+
+std::string PlotBars(const std::string& csv_path, const BarPlotSpec& spec) {
+  const std::string where = "bar plot " + csv_path + ": ";
+  if (spec.width_px < kMinWidthPx || spec.height_px < kMinHeightPx || spec.width_px > kMaxImagePx ||
+      spec.height_px > kMaxImagePx)
+    return where + "the image must be at least " + std::to_string(kMinWidthPx) + " x " +
+           std::to_string(kMinHeightPx) + " and at most " + std::to_string(kMaxImagePx) + " x " +
+           std::to_string(kMaxImagePx) + " pixels";
+  const std::string png =
+      spec.png_path.empty() ? fs::path(csv_path).replace_extension(".png").string() : spec.png_path;
+
+  CsvFile csv;
+  if (std::string err = ReadCsvFile(csv_path, &csv); !err.empty()) return where + err;
+  Bars bars;
+  if (std::string err = ReadBars(csv, spec, where, &bars); !err.empty()) return err;
+  const YRange y = BarYRange(bars, spec);
+  BarLayout layout;
+  if (std::string err = LayOutBars(bars, spec, y.any_whisker, &layout); !err.empty())
+    return where + err;
+
+  GnuplotFigure figure;
+  WriteBarTexts(figure, bars, spec, layout);
+  WriteBarData(figure, bars, spec, y.lo);
+  SetBarAxes(figure, bars, spec, layout, y);
+  PlotBarsAndWhiskers(figure, bars, layout);
+  PlotBarLegend(figure, bars, spec, layout, y.any_whisker);
+  const GnuplotImage image{png, layout.screen.width_px, layout.screen.height_px, "sans,11",
+                           spec.gnuplot};
+  if (std::string failure = figure.Draw(image); !failure.empty()) return where + failure;
   return "";
 }
 

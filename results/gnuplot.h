@@ -1,5 +1,5 @@
 // Running gnuplot on a script we write: the one place that starts gnuplot
-// (results/plot.h, the run and sweep reports build their scripts on it).
+// (results/gnuplot_figure.h builds the scripts of results/ on it).
 //
 // Texts go into scripts as gnuplot string expressions (GnuplotString) in
 // which gnuplot performs no substitution; data go in as inline data blocks

@@ -9,18 +9,19 @@
 #include <filesystem>
 #include <map>
 #include <optional>
+#include <ostream>
 #include <set>
-#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
 
-#include "results/csv.h"
-#include "results/gnuplot.h"
-#include "results/html.h"
 #include "core/atomic_file.h"
 #include "core/json_io.h"
+#include "results/csv.h"
+#include "results/gnuplot.h"
+#include "results/gnuplot_figure.h"
+#include "results/html.h"
 
 namespace uavsim::results {
 namespace {
@@ -93,11 +94,6 @@ double Quantile(std::vector<double> v, double q) {
   const auto lo = static_cast<std::size_t>(std::floor(h));
   const std::size_t hi = std::min(lo + 1, v.size() - 1);
   return v[lo] + (h - static_cast<double>(lo)) * (v[hi] - v[lo]);
-}
-
-// A data block "$name << EOD ... EOD".
-std::string Block(const std::string& name, const std::string& rows) {
-  return "$" + name + " << EOD\n" + rows + "EOD\n";
 }
 
 constexpr const char* kModalities[] = {"camera", "lidar", "radar"};
@@ -311,17 +307,17 @@ struct Figure {
   std::string missing;  // why it is not drawn ("" = drawn)
 };
 
-// Draws `script` into dir/png; a failure becomes the figure's note and a
+// Draws `figure` into dir/png; a failure becomes the figure's note and a
 // warning.
 Figure Draw(const RunData& d, const RunReportOptions& o, const std::string& png,
-            const std::string& caption, const std::string& script, int width, int height,
+            const std::string& caption, const GnuplotFigure& figure, int width, int height,
             std::vector<std::string>* warnings) {
   GnuplotImage image;
   image.png_path = (d.dir / png).string();
   image.width_px = width;
   image.height_px = height;
   image.gnuplot = o.gnuplot;
-  Figure f{png, caption, RunGnuplot(script, image)};
+  Figure f{png, caption, figure.Draw(image)};
   if (!f.missing.empty()) warnings->push_back(png + ": " + f.missing);
   return f;
 }
@@ -330,6 +326,214 @@ Figure NotDrawn(const std::string& png, const std::string& caption, const std::s
                 std::vector<std::string>* warnings) {
   warnings->push_back(png + ": " + why);
   return {png, caption, why};
+}
+
+// The columns of layout.csv the top view reads.
+struct LayoutColumns {
+  long object = 0, kind = 0, x = 0, y = 0;
+};
+
+LayoutColumns ColumnsOf(const Table& layout) {
+  return {layout.Column("object"), layout.Column("kind"), layout.Column("x_m"),
+          layout.Column("y_m")};
+}
+
+// The part of the ground plane the top view must show.
+struct Extent {
+  Eigen::Vector2d lo, hi;
+  void Add(double x, double y) {
+    lo = lo.cwiseMin(Eigen::Vector2d(x, y));
+    hi = hi.cwiseMax(Eigen::Vector2d(x, y));
+  }
+};
+
+// The true path and the nodes (not their fields of view), starting from the
+// path's first point (the origin without one).
+Extent PathAndNodesExtent(const RunData& d, const Table& layout, const LayoutColumns& lc) {
+  Eigen::Vector2d lo = Eigen::Vector2d::Zero();
+  if (!d.truth_p.empty()) lo = d.truth_p.front().head<2>();
+  Extent extent{lo, lo};
+  for (const auto& p : d.truth_p) extent.Add(p.x(), p.y());
+  for (std::size_t i = 0; i < layout.rows.size(); ++i)
+    if (layout.rows[i][static_cast<std::size_t>(lc.kind)] != "fov")
+      extent.Add(layout.Number(i, lc.x), layout.Number(i, lc.y));
+  return extent;
+}
+
+// world_top.csv's cells as "x y height" rows by surface, with the grid's
+// spacing and the tallest building's height.
+struct WorldCells {
+  double cell = 1.0, max_height = 1.0;
+  std::string buildings, trees, poles;
+};
+
+WorldCells ReadWorldCells(const RunData& d) {
+  WorldCells out;
+  if (!d.world_top || d.world_top->rows.empty()) return out;
+  const Table& w = *d.world_top;
+  const long wx = w.Column("x_m"), wy = w.Column("y_m"), wh = w.Column("height_m"),
+             ws = w.Column("surface");
+  std::set<double> xs;
+  for (std::size_t i = 0; i < w.rows.size() && xs.size() < 3; ++i) xs.insert(w.Number(i, wx));
+  if (xs.size() >= 2) out.cell = *std::next(xs.begin()) - *xs.begin();
+  for (std::size_t i = 0; i < w.rows.size(); ++i) {
+    const double x = w.Number(i, wx), y = w.Number(i, wy), h = w.Number(i, wh);
+    const std::string& s = w.rows[i][static_cast<std::size_t>(ws)];
+    const std::string row =
+        ShortestNumber(x) + " " + ShortestNumber(y) + " " + ShortestNumber(h) + "\n";
+    if (s == "foliage")
+      out.trees += row;
+    else if (s == "metal")
+      out.poles += row;
+    else
+      out.buildings += row, out.max_height = std::max(out.max_height, h);
+  }
+  // Cells lie on a grid: a smaller spacing among the first rows' xs.
+  std::vector<double> sorted;
+  for (std::size_t i = 0; i < std::min<std::size_t>(w.rows.size(), 400); ++i)
+    sorted.push_back(w.Number(i, wx));
+  std::sort(sorted.begin(), sorted.end());
+  for (std::size_t i = 1; i < sorted.size(); ++i)
+    if (sorted[i] - sorted[i - 1] > 1e-6) out.cell = std::min(out.cell, sorted[i] - sorted[i - 1]);
+  return out;
+}
+
+// A square about `extent` at equal scales, the titles, and the palette of
+// building heights.
+void SetTopViewAxes(GnuplotFigure& figure, const RunData& d, const Extent& extent,
+                    double max_height) {
+  const Eigen::Vector2d centre = 0.5 * (extent.lo + extent.hi);
+  const double half = 0.5 * (extent.hi - extent.lo).maxCoeff() + 3.0;
+  figure.Commands()
+      << "set size ratio -1\n"
+      << "set xrange [" << ShortestNumber(centre.x() - half) << ":"
+      << ShortestNumber(centre.x() + half) << "]\nset yrange [" << ShortestNumber(centre.y() - half)
+      << ":" << ShortestNumber(centre.y() + half) << "]\n"
+      << "set xlabel 'East x (m)'\nset ylabel 'North y (m)'\n"
+      << "set title " << GnuplotString("Top view: " + d.scenario.value("name", std::string("run")))
+      << "\n"
+      << "set key outside right top box opaque\n"
+      << "set grid front lc rgb '#bbbbbb'\n"
+      << "set palette defined (0 '#e6e6e6', 1 '#4d4d4d')\n"
+      << "set cbrange [0:" << ShortestNumber(max_height) << "]\n"
+      << "set cblabel 'Building height (m)'\n"
+      << "set colorbox vertical user origin screen 0.80, screen 0.12 size screen 0.02, screen 0.3\n"
+      << "set style fill solid 1.0 noborder\n";
+}
+
+// Buildings shaded by height, trees and poles, as boxes a hair wider than a
+// cell: no seams between cells.
+void PlotWorldCells(GnuplotFigure& figure, const WorldCells& cells) {
+  const std::string h = ShortestNumber(0.51 * cells.cell);
+  if (!cells.buildings.empty()) {
+    figure.Data("buildings", cells.buildings);
+    figure.Curve("$buildings using 1:2:(" + h + "):(" + h + "):3 with boxxy fc palette notitle");
+  }
+  if (!cells.trees.empty()) {
+    figure.Data("trees", cells.trees);
+    figure.Curve("$trees using 1:2:(" + h + "):(" + h +
+                 ") with boxxy fc rgb '#74c476' title 'trees'");
+  }
+  if (!cells.poles.empty()) {
+    figure.Data("poles", cells.poles);
+    figure.Curve("$poles using 1:2:(" + h + "):(" + h +
+                 ") with boxxy fc rgb '#08306b' title 'poles'");
+  }
+}
+
+// A label beside every node, in layout order; returns each node's kind by
+// its name.
+std::map<std::string, std::string> LabelNodes(GnuplotFigure& figure, const Table& layout,
+                                              const LayoutColumns& lc) {
+  std::map<std::string, std::string> node_kind;
+  int label = 0;
+  for (std::size_t i = 0; i < layout.rows.size(); ++i) {
+    const std::string& object = layout.rows[i][static_cast<std::size_t>(lc.object)];
+    const std::string& kind = layout.rows[i][static_cast<std::size_t>(lc.kind)];
+    if (kind == "fov" || kind == "base_station") continue;
+    node_kind[object] = kind;
+    ++label;
+    figure.Text("uavsim_label" + std::to_string(label), object);
+    figure.Commands() << "set label " << label << " uavsim_label" << label << " at "
+                      << ShortestNumber(layout.Number(i, lc.x)) << ","
+                      << ShortestNumber(layout.Number(i, lc.y)) << " offset 1,-1 front font ',9'\n";
+  }
+  return node_kind;
+}
+
+// The fields of view (one block per node, in layout order), dashed in their
+// node's modality colour.
+void PlotFieldsOfView(GnuplotFigure& figure, const Table& layout, const LayoutColumns& lc,
+                      const std::map<std::string, std::string>& node_kind) {
+  std::vector<std::string> fov_objects;
+  std::map<std::string, std::string> fov_rows;
+  for (std::size_t i = 0; i < layout.rows.size(); ++i) {
+    const std::string& object = layout.rows[i][static_cast<std::size_t>(lc.object)];
+    if (layout.rows[i][static_cast<std::size_t>(lc.kind)] != "fov") continue;
+    const std::string xy =
+        ShortestNumber(layout.Number(i, lc.x)) + " " + ShortestNumber(layout.Number(i, lc.y));
+    if (!fov_rows.count(object)) fov_objects.push_back(object);
+    fov_rows[object] += xy + "\n";
+  }
+  for (std::size_t k = 0; k < fov_objects.size(); ++k) {
+    const std::string& object = fov_objects[k];
+    const auto kind = node_kind.count(object) ? node_kind.at(object) : std::string();
+    std::size_t mi = 0;
+    while (mi < 3 && kind != kModalities[mi]) ++mi;
+    const std::string colour = mi < 3 ? kModalityColours[mi] : "#555555";
+    figure.Data("fov" + std::to_string(k), fov_rows[object]);
+    figure.Text("uavsim_fov" + std::to_string(k), object + " field of view");
+    figure.Curve("$fov" + std::to_string(k) + " using 1:2 with lines dt 2 lw 1.5 lc rgb '" +
+                 colour + "' title uavsim_fov" + std::to_string(k));
+  }
+}
+
+// The true path, then each method's estimates.
+void PlotPathAndEstimates(GnuplotFigure& figure, const RunData& d) {
+  std::string truth;
+  for (const auto& p : d.truth_p)
+    truth += ShortestNumber(p.x()) + " " + ShortestNumber(p.y()) + "\n";
+  figure.Data("truth", truth);
+  figure.Curve("$truth using 1:2 with lines lw 2 lc rgb 'black' title 'truth'");
+  std::size_t mk = 0;
+  for (const std::string& method : d.methods) {
+    const auto it = d.estimated.find(method);
+    if (it == d.estimated.end()) continue;
+    std::string rows;
+    for (const Estimate& e : it->second)
+      rows += ShortestNumber(e.p.x()) + " " + ShortestNumber(e.p.y()) + "\n";
+    figure.Data("est" + std::to_string(mk), rows);
+    figure.Text("uavsim_method" + std::to_string(mk), method);
+    figure.Curve("$est" + std::to_string(mk) + " using 1:2 with points pt 7 ps 0.6 lc rgb '" +
+                 MethodColour(d, method) + "' title uavsim_method" + std::to_string(mk));
+    ++mk;
+  }
+}
+
+// The nodes, a marker per modality, then the base station.
+void PlotNodes(GnuplotFigure& figure, const Table& layout, const LayoutColumns& lc) {
+  std::string nodes[3], base_station;
+  for (std::size_t i = 0; i < layout.rows.size(); ++i) {
+    const std::string& kind = layout.rows[i][static_cast<std::size_t>(lc.kind)];
+    const std::string row = ShortestNumber(layout.Number(i, lc.x)) + " " +
+                            ShortestNumber(layout.Number(i, lc.y)) + "\n";
+    if (kind == "base_station") base_station += row;
+    for (std::size_t m = 0; m < 3; ++m)
+      if (kind == kModalities[m]) nodes[m] += row;
+  }
+  const char* node_points[] = {"5", "9", "13"};
+  for (std::size_t m = 0; m < 3; ++m) {
+    if (nodes[m].empty()) continue;
+    figure.Data(std::string("node_") + kModalities[m], nodes[m]);
+    figure.Curve(std::string("$node_") + kModalities[m] + " using 1:2 with points pt " +
+                 node_points[m] + " ps 1.8 lc rgb '" + kModalityColours[m] + "' title '" +
+                 kModalities[m] + " node'");
+  }
+  if (!base_station.empty()) {
+    figure.Data("bs", base_station);
+    figure.Curve(
+        "$bs using 1:2 with points pt 3 ps 2.2 lw 2 lc rgb '#6a3d9a' title 'base station'");
+  }
 }
 
 Figure TopView(const RunData& d, const RunReportOptions& o, std::vector<std::string>* warnings) {
@@ -343,181 +547,37 @@ Figure TopView(const RunData& d, const RunReportOptions& o, std::vector<std::str
                     "the run has no " + std::string(!d.layout ? "layout.csv" : "truth.csv") +
                         " (made by an older uavsim)",
                     warnings);
-  std::ostringstream gp;
   // The plotted square: the cells of world_top.csv, the nodes and the path.
-  Eigen::Vector2d lo = Eigen::Vector2d::Zero();
-  if (!d.truth_p.empty()) lo = d.truth_p.front().head<2>();
-  Eigen::Vector2d hi = lo;
-  const auto add = [&](double x, double y) {
-    lo = lo.cwiseMin(Eigen::Vector2d(x, y));
-    hi = hi.cwiseMax(Eigen::Vector2d(x, y));
-  };
-  for (const auto& p : d.truth_p) add(p.x(), p.y());
   const Table& layout = *d.layout;
-  const long oc = layout.Column("object"), kc = layout.Column("kind"), xc = layout.Column("x_m"),
-             yc = layout.Column("y_m");
-  for (std::size_t i = 0; i < layout.rows.size(); ++i)
-    if (layout.rows[i][static_cast<std::size_t>(kc)] != "fov")
-      add(layout.Number(i, xc), layout.Number(i, yc));
-  double cell = 1.0, max_height = 1.0;
-  std::string buildings, trees, poles;
-  if (d.world_top && !d.world_top->rows.empty()) {
-    const Table& w = *d.world_top;
-    const long wx = w.Column("x_m"), wy = w.Column("y_m"), wh = w.Column("height_m"),
-               ws = w.Column("surface");
-    std::set<double> xs;
-    for (std::size_t i = 0; i < w.rows.size() && xs.size() < 3; ++i) xs.insert(w.Number(i, wx));
-    if (xs.size() >= 2) cell = *std::next(xs.begin()) - *xs.begin();
-    for (std::size_t i = 0; i < w.rows.size(); ++i) {
-      const double x = w.Number(i, wx), y = w.Number(i, wy), h = w.Number(i, wh);
-      const std::string& s = w.rows[i][static_cast<std::size_t>(ws)];
-      const std::string row =
-          ShortestNumber(x) + " " + ShortestNumber(y) + " " + ShortestNumber(h) + "\n";
-      if (s == "foliage")
-        trees += row;
-      else if (s == "metal")
-        poles += row;
-      else
-        buildings += row, max_height = std::max(max_height, h);
-    }
-    // Cells lie on a grid: a smaller spacing among the first rows' xs.
-    std::vector<double> sorted;
-    for (std::size_t i = 0; i < std::min<std::size_t>(w.rows.size(), 400); ++i)
-      sorted.push_back(w.Number(i, wx));
-    std::sort(sorted.begin(), sorted.end());
-    for (std::size_t i = 1; i < sorted.size(); ++i)
-      if (sorted[i] - sorted[i - 1] > 1e-6) cell = std::min(cell, sorted[i] - sorted[i - 1]);
-  }
+  const LayoutColumns lc = ColumnsOf(layout);
+  Extent extent = PathAndNodesExtent(d, layout, lc);
+  const WorldCells cells = ReadWorldCells(d);
   // The map's cells reach as far as the world_top.csv grid has anything.
   if (d.world_top)
     for (std::size_t i = 0; i < d.world_top->rows.size(); ++i)
-      add(d.world_top->Number(i, d.world_top->Column("x_m")),
-          d.world_top->Number(i, d.world_top->Column("y_m")));
-  const Eigen::Vector2d centre = 0.5 * (lo + hi);
-  const double half = 0.5 * (hi - lo).maxCoeff() + 3.0;
-  gp << "set size ratio -1\n"
-     << "set xrange [" << ShortestNumber(centre.x() - half) << ":"
-     << ShortestNumber(centre.x() + half) << "]\nset yrange [" << ShortestNumber(centre.y() - half)
-     << ":" << ShortestNumber(centre.y() + half) << "]\n"
-     << "set xlabel 'East x (m)'\nset ylabel 'North y (m)'\n"
-     << "set title " << GnuplotString("Top view: " + d.scenario.value("name", std::string("run")))
-     << "\n"
-     << "set key outside right top box opaque\n"
-     << "set grid front lc rgb '#bbbbbb'\n"
-     << "set palette defined (0 '#e6e6e6', 1 '#4d4d4d')\n"
-     << "set cbrange [0:" << ShortestNumber(max_height) << "]\n"
-     << "set cblabel 'Building height (m)'\n"
-     << "set colorbox vertical user origin screen 0.80, screen 0.12 size screen 0.02, screen 0.3\n"
-     << "set style fill solid 1.0 noborder\n";
-  std::string plots;
-  const auto add_plot = [&plots](const std::string& p) {
-    plots += (plots.empty() ? "plot " : ", \\\n     ") + p;
-  };
-  const std::string h = ShortestNumber(0.51 * cell);  // a hair wide: no seams between cells
-  if (!buildings.empty()) {
-    gp << Block("buildings", buildings);
-    add_plot("$buildings using 1:2:(" + h + "):(" + h + "):3 with boxxy fc palette notitle");
-  }
-  if (!trees.empty()) {
-    gp << Block("trees", trees);
-    add_plot("$trees using 1:2:(" + h + "):(" + h + ") with boxxy fc rgb '#74c476' title 'trees'");
-  }
-  if (!poles.empty()) {
-    gp << Block("poles", poles);
-    add_plot("$poles using 1:2:(" + h + "):(" + h + ") with boxxy fc rgb '#08306b' title 'poles'");
-  }
-  // Fields of view (one block per node, in layout order) and the nodes.
-  std::vector<std::string> fov_objects;
-  std::map<std::string, std::string> fov_rows, node_kind;
-  std::string base_station;
-  int label = 0;
-  for (std::size_t i = 0; i < layout.rows.size(); ++i) {
-    const std::string& object = layout.rows[i][static_cast<std::size_t>(oc)];
-    const std::string& kind = layout.rows[i][static_cast<std::size_t>(kc)];
-    const std::string xy =
-        ShortestNumber(layout.Number(i, xc)) + " " + ShortestNumber(layout.Number(i, yc));
-    if (kind == "fov") {
-      if (!fov_rows.count(object)) fov_objects.push_back(object);
-      fov_rows[object] += xy + "\n";
-    } else if (kind == "base_station") {
-      base_station += xy + "\n";
-    } else {
-      node_kind[object] = kind;
-      ++label;
-      gp << "uavsim_label" << label << " = " << GnuplotString(object) << "\n"
-         << "set label " << label << " uavsim_label" << label << " at "
-         << ShortestNumber(layout.Number(i, xc)) << "," << ShortestNumber(layout.Number(i, yc))
-         << " offset 1,-1 front font ',9'\n";
-    }
-  }
-  for (std::size_t k = 0; k < fov_objects.size(); ++k) {
-    const std::string& object = fov_objects[k];
-    const auto kind = node_kind.count(object) ? node_kind[object] : std::string();
-    std::size_t mi = 0;
-    while (mi < 3 && kind != kModalities[mi]) ++mi;
-    const std::string colour = mi < 3 ? kModalityColours[mi] : "#555555";
-    gp << Block("fov" + std::to_string(k), fov_rows[object]);
-    gp << "uavsim_fov" << k << " = " << GnuplotString(object + " field of view") << "\n";
-    add_plot("$fov" + std::to_string(k) + " using 1:2 with lines dt 2 lw 1.5 lc rgb '" + colour +
-             "' title uavsim_fov" + std::to_string(k));
-  }
-  // The true path, then each method's estimates.
-  std::string truth;
-  for (const auto& p : d.truth_p)
-    truth += ShortestNumber(p.x()) + " " + ShortestNumber(p.y()) + "\n";
-  gp << Block("truth", truth);
-  add_plot("$truth using 1:2 with lines lw 2 lc rgb 'black' title 'truth'");
-  std::size_t mk = 0;
-  for (const std::string& method : d.methods) {
-    const auto it = d.estimated.find(method);
-    if (it == d.estimated.end()) continue;
-    std::string rows;
-    for (const Estimate& e : it->second)
-      rows += ShortestNumber(e.p.x()) + " " + ShortestNumber(e.p.y()) + "\n";
-    gp << Block("est" + std::to_string(mk), rows) << "uavsim_method" << mk << " = "
-       << GnuplotString(method) << "\n";
-    add_plot("$est" + std::to_string(mk) + " using 1:2 with points pt 7 ps 0.6 lc rgb '" +
-             MethodColour(d, method) + "' title uavsim_method" + std::to_string(mk));
-    ++mk;
-  }
-  std::string nodes[3];
-  for (std::size_t i = 0; i < layout.rows.size(); ++i) {
-    const std::string& kind = layout.rows[i][static_cast<std::size_t>(kc)];
-    for (std::size_t m = 0; m < 3; ++m)
-      if (kind == kModalities[m])
-        nodes[m] += ShortestNumber(layout.Number(i, xc)) + " " +
-                    ShortestNumber(layout.Number(i, yc)) + "\n";
-  }
-  const char* node_points[] = {"5", "9", "13"};
-  for (std::size_t m = 0; m < 3; ++m) {
-    if (nodes[m].empty()) continue;
-    gp << Block(std::string("node_") + kModalities[m], nodes[m]);
-    add_plot(std::string("$node_") + kModalities[m] + " using 1:2 with points pt " +
-             node_points[m] + " ps 1.8 lc rgb '" + kModalityColours[m] + "' title '" +
-             kModalities[m] + " node'");
-  }
-  if (!base_station.empty()) {
-    gp << Block("bs", base_station);
-    add_plot("$bs using 1:2 with points pt 3 ps 2.2 lw 2 lc rgb '#6a3d9a' title 'base station'");
-  }
-  gp << plots << "\n";
-  return Draw(d, o, png, caption, gp.str(), 1000, 760, warnings);
+      extent.Add(d.world_top->Number(i, d.world_top->Column("x_m")),
+                 d.world_top->Number(i, d.world_top->Column("y_m")));
+  GnuplotFigure figure;
+  SetTopViewAxes(figure, d, extent, cells.max_height);
+  PlotWorldCells(figure, cells);
+  const std::map<std::string, std::string> node_kind = LabelNodes(figure, layout, lc);
+  PlotFieldsOfView(figure, layout, lc, node_kind);
+  PlotPathAndEstimates(figure, d);
+  PlotNodes(figure, layout, lc);
+  figure.Plot();
+  return Draw(d, o, png, caption, figure, 1000, 760, warnings);
 }
 
-Figure ErrorTime(const RunData& d, const Errors& errors, const std::optional<Packets>& packets,
-                 const RunReportOptions& o, std::vector<std::string>* warnings) {
-  const std::string png = "report/error_time.png";
-  const std::string caption =
-      "Top: each method's error (distance from the truth) at every window's end. Bottom: what the "
-      "edge had of each modality in each 0.2 s window: every frame on time, some on time, none "
-      "on time (late), none arrived (lost), nothing sent.";
-  std::ostringstream gp;
+// The upper plot: each method's error vs time, on a logarithmic axis when
+// the errors span decades.
+void PlotErrors(GnuplotFigure& figure, const RunData& d, const Errors& errors) {
   double lo = INFINITY, hi = 0.0;
   for (const auto& [m, rows] : errors.by_method)
     for (const auto& [t, e] : rows)
       if (e > 0) lo = std::min(lo, e), hi = std::max(hi, e);
   const bool log_y = hi > 0 && lo < INFINITY && hi / lo >= 20.0;  // spans decades
   const double t_end = std::max(d.duration_s, d.truth_t.empty() ? 0.0 : d.truth_t.back());
+  std::ostream& gp = figure.Commands();
   gp << "set multiplot\n"
      << "set lmargin at screen 0.08\nset rmargin at screen 0.80\n"
      << "set xrange [0:" << ShortestNumber(t_end) << "]\n"
@@ -527,7 +587,6 @@ Figure ErrorTime(const RunData& d, const Errors& errors, const std::optional<Pac
      << "\nset ylabel 'Error (m)'\nset format x ''\nset grid\n"
      << "set key outside right top\n"
      << (log_y ? "set logscale y\n" : "set yrange [0:*]\n");
-  std::string plots;
   std::size_t k = 0;
   for (const std::string& method : d.methods) {
     const auto it = errors.by_method.find(method);
@@ -535,19 +594,65 @@ Figure ErrorTime(const RunData& d, const Errors& errors, const std::optional<Pac
     std::string rows;
     for (const auto& [t, e] : it->second)
       if (!log_y || e > 0) rows += ShortestNumber(t) + " " + ShortestNumber(e) + "\n";
-    gp << Block("err" + std::to_string(k), rows) << "uavsim_method" << k << " = "
-       << GnuplotString(method) << "\n";
-    plots += (plots.empty() ? "plot " : ", ") + std::string("$err") + std::to_string(k) +
-             " using 1:2 with lines lw 1.5 lc rgb '" + MethodColour(d, method) +
-             "' title uavsim_method" + std::to_string(k);
+    figure.Data("err" + std::to_string(k), rows);
+    figure.Text("uavsim_method" + std::to_string(k), method);
+    figure.Curve("$err" + std::to_string(k) + " using 1:2 with lines lw 1.5 lc rgb '" +
+                 MethodColour(d, method) + "' title uavsim_method" + std::to_string(k));
     ++k;
   }
-  if (plots.empty())  // a run shorter than every method's warm-up
+  if (!figure.HasCurves())  // a run shorter than every method's warm-up
     gp << "set yrange [0:1]\nset format y ''\nset label 1 'no method produced an estimate' at "
           "graph 0.5, graph 0.5 center\nplot NaN notitle\nunset label 1\nset format y '%g'\n";
   else
-    gp << plots << "\n";
+    figure.Plot(CurveLayout::kOneLine);
+}
+
+// The strip's rows: one per modality, a box per window coloured by state
+// (every state in the legend, drawn or not).
+void PlotWindowStates(GnuplotFigure& figure, const RunData& d, const Packets& packets) {
+  std::ostream& gp = figure.Commands();
+  const std::vector<std::string> order = ModalityOrder(packets);
+  const std::size_t n = order.size();
+  gp << "set yrange [-0.6:" << ShortestNumber(static_cast<double>(n) - 0.4) << "]\nset ytics (";
+  for (std::size_t m = 0; m < n; ++m)
+    gp << (m ? ", " : "") << GnuplotString(order[m]) << " " << (n - 1 - m);
+  gp << ") nomirror\nset style fill solid 1.0 noborder\n";
+  const std::pair<const char*, const char*> states[] = {{"on_time", "#1a9641"},
+                                                        {"partly", "#a6d96a"},
+                                                        {"late", "#fdae61"},
+                                                        {"lost", "#d7191c"},
+                                                        {"none_sent", "#d9d9d9"}};
+  const char* titles[] = {"all on time", "some on time", "none on time (late)",
+                          "none arrived (lost)", "nothing sent"};
+  std::map<std::string, std::string> rows;
+  for (std::size_t w = 0; w < packets.windows.size(); ++w)
+    for (std::size_t m = 0; m < n; ++m) {
+      const auto it = packets.windows[w].find(order[m]);
+      const Reception r = it == packets.windows[w].end() ? Reception{} : it->second;
+      rows[WindowState(r)] += ShortestNumber((static_cast<double>(w) + 0.5) * d.window_s) + " " +
+                              std::to_string(n - 1 - m) + "\n";
+    }
+  for (std::size_t s = 0; s < 5; ++s) {
+    const std::string name = states[s].first;
+    // Every state keeps its legend entry, drawn or not.
+    figure.Data("st_" + name, rows.count(name) ? rows[name] : std::string("NaN NaN\n"));
+    figure.Curve(std::string("$st_") + name + " using 1:2:(" + ShortestNumber(0.5 * d.window_s) +
+                 "):(0.38) with boxxy fc rgb '" + states[s].second + "' title '" + titles[s] + "'");
+  }
+  figure.Plot(CurveLayout::kOneLine);
+}
+
+Figure ErrorTime(const RunData& d, const Errors& errors, const std::optional<Packets>& packets,
+                 const RunReportOptions& o, std::vector<std::string>* warnings) {
+  const std::string png = "report/error_time.png";
+  const std::string caption =
+      "Top: each method's error (distance from the truth) at every window's end. Bottom: what the "
+      "edge had of each modality in each 0.2 s window: every frame on time, some on time, none "
+      "on time (late), none arrived (lost), nothing sent.";
+  GnuplotFigure figure;
+  PlotErrors(figure, d, errors);
   // The strip: one row per modality, a box per window coloured by state.
+  std::ostream& gp = figure.Commands();
   gp << "unset logscale y\nunset title\nset format x '%g'\nset xlabel 'Simulated time (s)'\n"
      << "set tmargin at screen 0.33\nset bmargin at screen 0.09\n"
      << "unset grid\nset ylabel ''\nset key outside right center\n";
@@ -556,40 +661,10 @@ Figure ErrorTime(const RunData& d, const Errors& errors, const std::optional<Pac
           "graph 0.5 center\n"
        << "plot NaN notitle\n";
   } else {
-    const std::vector<std::string> order = ModalityOrder(*packets);
-    const std::size_t n = order.size();
-    gp << "set yrange [-0.6:" << ShortestNumber(static_cast<double>(n) - 0.4) << "]\nset ytics (";
-    for (std::size_t m = 0; m < n; ++m)
-      gp << (m ? ", " : "") << GnuplotString(order[m]) << " " << (n - 1 - m);
-    gp << ") nomirror\nset style fill solid 1.0 noborder\n";
-    const std::pair<const char*, const char*> states[] = {{"on_time", "#1a9641"},
-                                                          {"partly", "#a6d96a"},
-                                                          {"late", "#fdae61"},
-                                                          {"lost", "#d7191c"},
-                                                          {"none_sent", "#d9d9d9"}};
-    const char* titles[] = {"all on time", "some on time", "none on time (late)",
-                            "none arrived (lost)", "nothing sent"};
-    std::map<std::string, std::string> rows;
-    for (std::size_t w = 0; w < packets->windows.size(); ++w)
-      for (std::size_t m = 0; m < n; ++m) {
-        const auto it = packets->windows[w].find(order[m]);
-        const Reception r = it == packets->windows[w].end() ? Reception{} : it->second;
-        rows[WindowState(r)] += ShortestNumber((static_cast<double>(w) + 0.5) * d.window_s) + " " +
-                                std::to_string(n - 1 - m) + "\n";
-      }
-    std::string strip;
-    for (std::size_t s = 0; s < 5; ++s) {
-      const std::string name = states[s].first;
-      // Every state keeps its legend entry, drawn or not.
-      gp << Block("st_" + name, rows.count(name) ? rows[name] : std::string("NaN NaN\n"));
-      strip += (strip.empty() ? "plot " : ", ") + std::string("$st_") + name + " using 1:2:(" +
-               ShortestNumber(0.5 * d.window_s) + "):(0.38) with boxxy fc rgb '" +
-               states[s].second + "' title '" + titles[s] + "'";
-    }
-    gp << strip << "\n";
+    PlotWindowStates(figure, d, *packets);
   }
   gp << "unset multiplot\n";
-  return Draw(d, o, png, caption, gp.str(), 1100, 620, warnings);
+  return Draw(d, o, png, caption, figure, 1100, 620, warnings);
 }
 
 Figure PacketsFigure(const RunData& d, const Packets& p, const RunReportOptions& o,
@@ -598,7 +673,7 @@ Figure PacketsFigure(const RunData& d, const Packets& p, const RunReportOptions&
   const std::string caption =
       "Messages per modality by fate: delivered by its window's deadline, late (arrived after it: "
       "the pipeline treats it as missing), lost on the uplink, still in flight at the end.";
-  std::ostringstream gp;
+  GnuplotFigure figure;
   // Labels as string expressions, data as numbers only (no name in a block).
   std::string rows, tics;
   const std::vector<std::string> order = ModalityOrder(p);
@@ -608,14 +683,18 @@ Figure PacketsFigure(const RunData& d, const Packets& p, const RunReportOptions&
             " " + std::to_string(r.lost) + " " + std::to_string(r.in_flight) + "\n";
     tics += (k ? ", " : "") + GnuplotString(order[k]) + " " + std::to_string(k);
   }
-  gp << Block("packets", rows) << "set title 'Uplink messages by fate'\nset ylabel 'Messages'\n"
-     << "set style data histograms\nset style histogram rowstacked\nset boxwidth 0.6\n"
-     << "set style fill solid 1.0 border -1\nset yrange [0:*]\nset grid ytics\n"
-     << "set key outside right top\nset xtics (" << tics << ")\n"
-     << "plot $packets using 2 lc rgb '#1a9641' title 'delivered', "
-     << "'' using 3 lc rgb '#fdae61' title 'late', '' using 4 lc rgb '#d7191c' title 'lost', "
-     << "'' using 5 lc rgb '#969696' title 'in flight'\n";
-  return Draw(d, o, png, caption, gp.str(), 640, 440, warnings);
+  figure.Data("packets", rows);
+  figure.Commands()
+      << "set title 'Uplink messages by fate'\nset ylabel 'Messages'\n"
+      << "set style data histograms\nset style histogram rowstacked\nset boxwidth 0.6\n"
+      << "set style fill solid 1.0 border -1\nset yrange [0:*]\nset grid ytics\n"
+      << "set key outside right top\nset xtics (" << tics << ")\n";
+  figure.Curve("$packets using 2 lc rgb '#1a9641' title 'delivered'");
+  figure.Curve("'' using 3 lc rgb '#fdae61' title 'late'");
+  figure.Curve("'' using 4 lc rgb '#d7191c' title 'lost'");
+  figure.Curve("'' using 5 lc rgb '#969696' title 'in flight'");
+  figure.Plot(CurveLayout::kOneLine);
+  return Draw(d, o, png, caption, figure, 640, 440, warnings);
 }
 
 Figure LatencyFigure(const RunData& d, const Packets& p, CsvTable* csv, const RunReportOptions& o,
@@ -624,8 +703,7 @@ Figure LatencyFigure(const RunData& d, const Packets& p, CsvTable* csv, const Ru
   const std::string caption =
       "Latency (capture to arrival at the edge, on time or late) per modality, as the share of "
       "arrivals within a latency.";
-  std::ostringstream gp;
-  std::string plots;
+  GnuplotFigure figure;
   std::size_t k = 0;
   const std::vector<std::string> order = ModalityOrder(p);
   for (std::size_t m = 0; m < order.size(); ++m) {
@@ -639,18 +717,18 @@ Figure LatencyFigure(const RunData& d, const Packets& p, CsvTable* csv, const Ru
       rows += ShortestNumber(v[i]) + " " + ShortestNumber(f) + "\n";
       csv->AddRow({order[m], Fixed(v[i], 3), Fixed(f, 6)});
     }
-    gp << Block("lat" + std::to_string(k), rows) << "uavsim_mod" << k << " = "
-       << GnuplotString(order[m]) << "\n";
-    plots += (plots.empty() ? "plot " : ", ") + std::string("$lat") + std::to_string(k) +
-             " using 1:2 with steps lw 2 lc rgb '" + ModalityColour(order[m], m) +
-             "' title uavsim_mod" + std::to_string(k);
+    figure.Data("lat" + std::to_string(k), rows);
+    figure.Text("uavsim_mod" + std::to_string(k), order[m]);
+    figure.Curve("$lat" + std::to_string(k) + " using 1:2 with steps lw 2 lc rgb '" +
+                 ModalityColour(order[m], m) + "' title uavsim_mod" + std::to_string(k));
     ++k;
   }
-  if (plots.empty()) return NotDrawn(png, caption, "no message arrived", warnings);
-  gp << "set title 'Uplink latency (empirical CDF)'\nset xlabel 'Latency (ms)'\n"
-     << "set ylabel 'Share of arrivals'\nset yrange [0:1.02]\nset grid\nset key right bottom\n"
-     << plots << "\n";
-  return Draw(d, o, png, caption, gp.str(), 640, 440, warnings);
+  if (!figure.HasCurves()) return NotDrawn(png, caption, "no message arrived", warnings);
+  figure.Commands()
+      << "set title 'Uplink latency (empirical CDF)'\nset xlabel 'Latency (ms)'\n"
+      << "set ylabel 'Share of arrivals'\nset yrange [0:1.02]\nset grid\nset key right bottom\n";
+  figure.Plot(CurveLayout::kOneLine);
+  return Draw(d, o, png, caption, figure, 640, 440, warnings);
 }
 
 // rate_snr.png from rate_snr.csv (every window; a method without an
@@ -684,25 +762,25 @@ Figure RateSnr(const RunData& d, bool common, const RunReportOptions& o,
   if (beams.empty() && common)
     return {png, caption, "no window in which every method that steers a beam had an estimate"};
   if (beams.empty()) return NotDrawn(png, caption, stem + ".csv has no rows", warnings);
-  std::ostringstream gp;
-  std::string plots;
+  GnuplotFigure figure;
   for (std::size_t k = 0; k < beams.size(); ++k) {
-    gp << Block("b" + std::to_string(k), rows[beams[k]]) << "uavsim_beam" << k << " = "
-       << GnuplotString(beams[k]) << "\n";
+    figure.Data("b" + std::to_string(k), rows[beams[k]]);
+    figure.Text("uavsim_beam" + std::to_string(k), beams[k]);
     const bool method = std::find(d.methods.begin(), d.methods.end(), beams[k]) != d.methods.end();
     const std::string colour = beams[k] == "perfect" ? "black"
                                : method              ? MethodColour(d, beams[k])
                                                      : "#777777";
-    plots += (plots.empty() ? "plot " : ", ") + std::string("$b") + std::to_string(k) +
-             " using 1:2 with linespoints pt 7 ps 0.6 lw 1.5 lc rgb '" + colour +
-             "' title uavsim_beam" + std::to_string(k);
+    figure.Curve("$b" + std::to_string(k) +
+                 " using 1:2 with linespoints pt 7 ps 0.6 lw 1.5 lc rgb '" + colour +
+                 "' title uavsim_beam" + std::to_string(k));
   }
-  gp << "set title "
-     << GnuplotString(std::string(common ? "On common windows: " : "Achievable rate vs SNR: ") +
-                      d.scenario.value("name", std::string("run")))
-     << "\nset xlabel 'SNR (dB)'\nset ylabel 'Rate (bit/s/Hz)'\nset grid\nset key top left\n"
-     << plots << "\n";
-  return Draw(d, o, png, caption, gp.str(), 800, 560, warnings);
+  figure.Commands()
+      << "set title "
+      << GnuplotString(std::string(common ? "On common windows: " : "Achievable rate vs SNR: ") +
+                       d.scenario.value("name", std::string("run")))
+      << "\nset xlabel 'SNR (dB)'\nset ylabel 'Rate (bit/s/Hz)'\nset grid\nset key top left\n";
+  figure.Plot(CurveLayout::kOneLine);
+  return Draw(d, o, png, caption, figure, 800, 560, warnings);
 }
 
 // ---------------------------------------------------------------------------
@@ -837,6 +915,122 @@ std::vector<std::vector<std::string>> ProfileRows(const RunData& d) {
 
 void AddFigure(HtmlPage& page, const Figure& f) { page.Figure(f.png, f.caption, f.missing); }
 
+// Per alignment window and modality, its messages by fate and the state.
+CsvTable WindowsTable(const RunData& d, const Packets& packets) {
+  CsvTable windows({"window", "t_start_s", "t_end_s", "modality", "sent", "delivered", "late",
+                    "lost", "in_flight", "state"});
+  const std::vector<std::string> order = ModalityOrder(packets);
+  for (std::size_t w = 0; w < packets.windows.size(); ++w)
+    for (const std::string& m : order) {
+      const auto it = packets.windows[w].find(m);
+      const Reception r = it == packets.windows[w].end() ? Reception{} : it->second;
+      windows.AddRow({std::to_string(w), Fixed(static_cast<double>(w) * d.window_s, 6),
+                      Fixed(static_cast<double>(w + 1) * d.window_s, 6), m,
+                      std::to_string(r.sent()), std::to_string(r.delivered), std::to_string(r.late),
+                      std::to_string(r.lost), std::to_string(r.in_flight), WindowState(r)});
+    }
+  return windows;
+}
+
+// Per modality, its messages by fate over the run.
+CsvTable TotalsTable(const Packets& packets) {
+  CsvTable totals({"modality", "delivered", "late", "lost", "in_flight"});
+  for (const std::string& m : ModalityOrder(packets)) {
+    const Reception& r = packets.totals.at(m);
+    totals.AddRow({m, std::to_string(r.delivered), std::to_string(r.late), std::to_string(r.lost),
+                   std::to_string(r.in_flight)});
+  }
+  return totals;
+}
+
+// The reception tables under report/ and their figures (or, without
+// packets.csv, the note that they are missing).
+std::vector<Figure> WriteReception(const RunData& d, const std::optional<Packets>& packets,
+                                   const fs::path& report, const RunReportOptions& options,
+                                   std::vector<std::string>* warnings) {
+  std::vector<Figure> reception;
+  if (!packets) {
+    reception.push_back(NotDrawn("report/packets.png", "Messages per modality by fate.",
+                                 "the run has no packets.csv (made by an older uavsim)", warnings));
+    return reception;
+  }
+  core::WriteFileAtomic((report / "windows.csv").string(), WindowsTable(d, *packets).str());
+  core::WriteFileAtomic((report / "packets_by_fate.csv").string(), TotalsTable(*packets).str());
+  CsvTable latency_csv({"modality", "latency_ms", "fraction"});
+  reception.push_back(PacketsFigure(d, *packets, options, warnings));
+  reception.push_back(LatencyFigure(d, *packets, &latency_csv, options, warnings));
+  core::WriteFileAtomic((report / "latency.csv").string(), latency_csv.str());
+  return reception;
+}
+
+struct ReportFigures {
+  std::vector<Figure> reception;
+  Figure top, error_time, rate, rate_common;
+};
+
+std::string Headline(const RunData& d) {
+  return "Simulated " + JsonFixed(d.metrics, "sim_s", 1) + " s in " +
+         JsonFixed(d.metrics, "wall_s", 1) + " s of wall time (" +
+         JsonFixed(d.metrics, "realtime_factor", 2) + "x real time); " +
+         JsonText(d.metrics.value("windows", Json(nullptr))) + " alignment windows of " +
+         ShortestNumber(d.window_s) + " s.";
+}
+
+// Links to the run's files and the report's tables that exist.
+std::string FileLinks(const RunData& d) {
+  std::error_code ec;
+  std::string links;
+  for (const char* f :
+       {"manifest.json", "metrics.json", "truth.csv", "estimates.csv", "packets.csv",
+        "rate_snr.csv", "rate_snr_common.csv", "world_top.csv", "layout.csv", "report/errors.csv",
+        "report/windows.csv", "report/packets_by_fate.csv", "report/latency.csv"}) {
+    if (!fs::is_regular_file(d.dir / f, ec)) continue;
+    links += std::string(links.empty() ? "" : " · ") + "<a href=\"" + HtmlEscape(f) + "\">" +
+             HtmlEscape(f) + "</a>";
+  }
+  return links;
+}
+
+// report.html: the tables and figures, section by section.
+std::string RunPage(const RunData& d, const Errors& errors, const ReportFigures& figures) {
+  const std::string name = d.scenario.value("name", std::string("run"));
+  HtmlPage page("uavsim run: " + name);
+  page.Paragraph(Headline(d));
+  page.Heading("Localization");
+  page.Table(RmseRows(d, errors));
+  page.Paragraph(
+      "RMSE over the windows each method estimated; the common windows are those every method "
+      "estimated (methods start at different windows). Median and 90th percentile of the same "
+      "errors (report/errors.csv).");
+  AddFigure(page, figures.top);
+  AddFigure(page, figures.error_time);
+  page.Heading("Uplink: what reached the edge");
+  page.Table(ReceptionRows(d));
+  page.BeginRow();
+  for (const Figure& f : figures.reception) AddFigure(page, f);
+  page.EndRow();
+  page.Heading("Data rates (as the paper's Table II)");
+  page.Table(DataRateRows(d));
+  page.Paragraph(
+      "Raw: the sensor's frames; pre-processed: what the node's pre-processing keeps; compressed: "
+      "the IB-CC latent messages sent on the uplink.");
+  page.Heading("Base-station beam");
+  page.BeginRow();
+  AddFigure(page, figures.rate);
+  AddFigure(page, figures.rate_common);
+  page.EndRow();
+  page.Heading("Scenario");
+  page.Table(SettingsRows(d));
+  page.Heading("Where the wall time went");
+  page.Table(ProfileRows(d));
+  page.Paragraph(
+      "Wall seconds per part (metrics.json profile_s). Nodes that capture on threads of their own "
+      "overlap the rest, so the parts can sum to more than the run's wall time.");
+  page.Heading("Files");
+  page.RawParagraph(FileLinks(d));
+  return page.str();
+}
+
 }  // namespace
 
 std::vector<std::string> WriteRunReport(const std::string& dir, const RunReportOptions& options) {
@@ -852,94 +1046,13 @@ std::vector<std::string> WriteRunReport(const std::string& dir, const RunReportO
   if (ec) throw std::runtime_error(report.string() + ": cannot create folder: " + ec.message());
   core::WriteFileAtomic((report / "errors.csv").string(), errors.csv.str());
 
-  CsvTable latency_csv({"modality", "latency_ms", "fraction"});
-  std::vector<Figure> reception;
-  if (packets) {
-    CsvTable windows({"window", "t_start_s", "t_end_s", "modality", "sent", "delivered", "late",
-                      "lost", "in_flight", "state"});
-    CsvTable totals({"modality", "delivered", "late", "lost", "in_flight"});
-    const std::vector<std::string> order = ModalityOrder(*packets);
-    for (std::size_t w = 0; w < packets->windows.size(); ++w)
-      for (const std::string& m : order) {
-        const auto it = packets->windows[w].find(m);
-        const Reception r = it == packets->windows[w].end() ? Reception{} : it->second;
-        windows.AddRow({std::to_string(w), Fixed(static_cast<double>(w) * d.window_s, 6),
-                        Fixed(static_cast<double>(w + 1) * d.window_s, 6), m,
-                        std::to_string(r.sent()), std::to_string(r.delivered),
-                        std::to_string(r.late), std::to_string(r.lost), std::to_string(r.in_flight),
-                        WindowState(r)});
-      }
-    for (const std::string& m : order) {
-      const Reception& r = packets->totals.at(m);
-      totals.AddRow({m, std::to_string(r.delivered), std::to_string(r.late), std::to_string(r.lost),
-                     std::to_string(r.in_flight)});
-    }
-    core::WriteFileAtomic((report / "windows.csv").string(), windows.str());
-    core::WriteFileAtomic((report / "packets_by_fate.csv").string(), totals.str());
-    reception.push_back(PacketsFigure(d, *packets, options, &warnings));
-    reception.push_back(LatencyFigure(d, *packets, &latency_csv, options, &warnings));
-    core::WriteFileAtomic((report / "latency.csv").string(), latency_csv.str());
-  } else {
-    reception.push_back(NotDrawn("report/packets.png", "Messages per modality by fate.",
-                                 "the run has no packets.csv (made by an older uavsim)",
-                                 &warnings));
-  }
-  const Figure top = TopView(d, options, &warnings);
-  const Figure error_time = ErrorTime(d, errors, packets, options, &warnings);
-  const Figure rate = RateSnr(d, false, options, &warnings);
-  const Figure rate_common = RateSnr(d, true, options, &warnings);
-
-  const std::string name = d.scenario.value("name", std::string("run"));
-  HtmlPage page("uavsim run: " + name);
-  const Json rmse = d.metrics.value("rmse_m", Json::object());
-  std::string headline = "Simulated " + JsonFixed(d.metrics, "sim_s", 1) + " s in " +
-                         JsonFixed(d.metrics, "wall_s", 1) + " s of wall time (" +
-                         JsonFixed(d.metrics, "realtime_factor", 2) + "x real time); " +
-                         JsonText(d.metrics.value("windows", Json(nullptr))) +
-                         " alignment windows of " + ShortestNumber(d.window_s) + " s.";
-  page.Paragraph(headline);
-  page.Heading("Localization");
-  page.Table(RmseRows(d, errors));
-  page.Paragraph(
-      "RMSE over the windows each method estimated; the common windows are those every method "
-      "estimated (methods start at different windows). Median and 90th percentile of the same "
-      "errors (report/errors.csv).");
-  AddFigure(page, top);
-  AddFigure(page, error_time);
-  page.Heading("Uplink: what reached the edge");
-  page.Table(ReceptionRows(d));
-  page.BeginRow();
-  for (const Figure& f : reception) AddFigure(page, f);
-  page.EndRow();
-  page.Heading("Data rates (as the paper's Table II)");
-  page.Table(DataRateRows(d));
-  page.Paragraph(
-      "Raw: the sensor's frames; pre-processed: what the node's pre-processing keeps; compressed: "
-      "the IB-CC latent messages sent on the uplink.");
-  page.Heading("Base-station beam");
-  page.BeginRow();
-  AddFigure(page, rate);
-  AddFigure(page, rate_common);
-  page.EndRow();
-  page.Heading("Scenario");
-  page.Table(SettingsRows(d));
-  page.Heading("Where the wall time went");
-  page.Table(ProfileRows(d));
-  page.Paragraph(
-      "Wall seconds per part (metrics.json profile_s). Nodes that capture on threads of their own "
-      "overlap the rest, so the parts can sum to more than the run's wall time.");
-  page.Heading("Files");
-  std::string links;
-  for (const char* f :
-       {"manifest.json", "metrics.json", "truth.csv", "estimates.csv", "packets.csv",
-        "rate_snr.csv", "rate_snr_common.csv", "world_top.csv", "layout.csv", "report/errors.csv",
-        "report/windows.csv", "report/packets_by_fate.csv", "report/latency.csv"}) {
-    if (!fs::is_regular_file(d.dir / f, ec)) continue;
-    links += std::string(links.empty() ? "" : " · ") + "<a href=\"" + HtmlEscape(f) + "\">" +
-             HtmlEscape(f) + "</a>";
-  }
-  page.RawParagraph(links);
-  core::WriteFileAtomic((d.dir / "report.html").string(), page.str());
+  ReportFigures figures;
+  figures.reception = WriteReception(d, packets, report, options, &warnings);
+  figures.top = TopView(d, options, &warnings);
+  figures.error_time = ErrorTime(d, errors, packets, options, &warnings);
+  figures.rate = RateSnr(d, false, options, &warnings);
+  figures.rate_common = RateSnr(d, true, options, &warnings);
+  core::WriteFileAtomic((d.dir / "report.html").string(), RunPage(d, errors, figures));
   return warnings;
 }
 
