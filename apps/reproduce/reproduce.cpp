@@ -13,18 +13,18 @@
 #include <memory>
 #include <set>
 
-#include "pipeline/torch_runtime.h"
-#include "pipeline/training/dataset_io.h"
-#include "pipeline/training_config.h"
-#include "pipeline/variants.h"
-#include "results/run_directory.h"
+#include "apps/reproduce/reproduce_report.h"
+#include "apps/sweep/process_farm.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/file_lock.h"
 #include "core/interrupt.h"
 #include "core/json_io.h"
-#include "apps/sweep/process_farm.h"
-#include "apps/reproduce/reproduce_report.h"
+#include "pipeline/torch_runtime.h"
+#include "pipeline/training/dataset_io.h"
+#include "pipeline/training_config.h"
+#include "pipeline/variants.h"
+#include "results/run_directory.h"
 #include "sim/run.h"
 
 namespace uavsim::sim {
@@ -188,6 +188,39 @@ std::string UtcNow() {
   return buf;
 }
 
+// The plan's arms: the stage-1 arms of every seed first, so that the farm
+// can start the arms that reuse them once they are done.
+void AddArms(ReproducePlan& plan) {
+  const int z0 = plan.scenario_latent_dim;
+  const auto arm = [&](const std::string& variant, int z, std::uint64_t seed,
+                       const std::string& encoders, bool edge, bool frame = false) {
+    ReproduceArm a;
+    a.id = ArmId(variant, z, seed, frame);
+    a.variant = variant;
+    a.latent_dim = z;
+    a.seed = seed;
+    a.set = EpisodeSetName(pipeline::FindVariant(variant)->raw_modalities);
+    a.encoders = encoders;
+    a.edge = edge;
+    a.frame_split = frame;
+    plan.arms.push_back(a);
+  };
+  for (int s = 1; s <= plan.seeds; ++s) {
+    const auto seed = static_cast<std::uint64_t>(s);
+    for (const char* v : {"paper", "raw"})
+      for (int z : plan.latent_dims) arm(v, z, seed, "", z == z0);
+    for (int z : plan.latent_dims) arm("mlp_bottleneck", z, seed, "", false);
+    arm("paper", z0, seed, "", true, true);
+    arm("raw_camera", z0, seed, "", true);
+    arm("raw_lidar_radar", z0, seed, "", true);
+  }
+  for (int s = 1; s <= plan.seeds; ++s) {
+    const auto seed = static_cast<std::uint64_t>(s);
+    for (const char* base : {"paper", "raw"})
+      for (const std::string& v : OnEncodersOf(base)) arm(v, z0, seed, ArmId(base, z0, seed), true);
+  }
+}
+
 }  // namespace
 
 std::string EpisodeSetName(std::uint8_t raw) {
@@ -254,62 +287,43 @@ ReproducePlan MakeReproducePlan(const Scenario& base, const ReproduceOptions& o)
     plan.latent_dims.push_back(plan.scenario_latent_dim);
     std::sort(plan.latent_dims.begin(), plan.latent_dims.end());
   }
-  const int z0 = plan.scenario_latent_dim;
-  const auto arm = [&](const std::string& variant, int z, std::uint64_t seed,
-                       const std::string& encoders, bool edge, bool frame = false) {
-    ReproduceArm a;
-    a.id = ArmId(variant, z, seed, frame);
-    a.variant = variant;
-    a.latent_dim = z;
-    a.seed = seed;
-    a.set = EpisodeSetName(pipeline::FindVariant(variant)->raw_modalities);
-    a.encoders = encoders;
-    a.edge = edge;
-    a.frame_split = frame;
-    plan.arms.push_back(a);
-  };
-  // Stage-1 arms of every seed first, so that the farm can start the arms
-  // that reuse them once they are done.
-  for (int s = 1; s <= plan.seeds; ++s) {
-    const auto seed = static_cast<std::uint64_t>(s);
-    for (const char* v : {"paper", "raw"})
-      for (int z : plan.latent_dims) arm(v, z, seed, "", z == z0);
-    for (int z : plan.latent_dims) arm("mlp_bottleneck", z, seed, "", false);
-    arm("paper", z0, seed, "", true, true);
-    arm("raw_camera", z0, seed, "", true);
-    arm("raw_lidar_radar", z0, seed, "", true);
-  }
-  for (int s = 1; s <= plan.seeds; ++s) {
-    const auto seed = static_cast<std::uint64_t>(s);
-    for (const char* base : {"paper", "raw"})
-      for (const std::string& v : OnEncodersOf(base)) arm(v, z0, seed, ArmId(base, z0, seed), true);
-  }
+  AddArms(plan);
   return plan;
 }
 
-ReproduceOutcome RunReproduce(const Scenario& base, const ReproduceOptions& o) {
-  const auto started = std::chrono::steady_clock::now();
-  const std::string started_utc = UtcNow();
-  if (o.jobs < 1) throw core::UsageError("uavsim reproduce: --jobs needs at least 1");
-  const ReproducePlan plan = MakeReproducePlan(base, o);
-  if (plan.episodes.episodes < 3)
-    throw core::UsageError("uavsim reproduce: --episodes needs at least 3");
-  ReproduceOutcome out;
-  out.arms = plan.arms.size();
-  const std::string dir = fs::absolute(o.out_dir).string();
+namespace {
 
+using EpisodeSets = std::map<std::string, std::vector<pipeline::Episode>>;
+
+// This invocation's start, for its wall time and DIR/invocations.csv.
+struct Invocation {
+  std::chrono::steady_clock::time_point started = std::chrono::steady_clock::now();
+  std::string started_utc = UtcNow();
+  double WallS() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  }
+};
+
+// The MPI environment and communicator under mpirun (null otherwise).
+struct Ranks {
   std::unique_ptr<boost::mpi::environment> env;
   std::unique_ptr<boost::mpi::communicator> world;
-  if (UnderMpirun()) {
-    env = std::make_unique<boost::mpi::environment>();
-    world = std::make_unique<boost::mpi::communicator>();
+  bool coordinator = true;  // rank 0, or no MPI
+  Ranks() {
+    if (UnderMpirun()) {
+      env = std::make_unique<boost::mpi::environment>();
+      world = std::make_unique<boost::mpi::communicator>();
+    }
+    coordinator = !world || world->rank() == 0;
   }
-  const bool coordinator = !world || world->rank() == 0;
+};
 
-  // 1. The episode sets, each simulated once (every rank its share). Rank 0
-  // locks DIR as it first prepares it, to the end.
-  std::optional<core::FileLock> lock;
-  std::map<std::string, std::vector<pipeline::Episode>> sets;
+// The episode sets, each simulated once (every rank its share). Rank 0
+// locks DIR into `lock` as it first prepares it.
+EpisodeSets SimulateEpisodeSets(const Scenario& base, const ReproducePlan& plan,
+                                const ReproduceOptions& o, const std::string& dir,
+                                const Ranks& ranks, std::optional<core::FileLock>& lock) {
+  EpisodeSets sets;
   for (const std::string& set : SetsOf(plan)) {
     Scenario s = base;
     pipeline::Variant nodes{"", "", "", "{}", false, MaskOfSet(plan, set)};
@@ -322,7 +336,7 @@ ReproduceOutcome RunReproduce(const Scenario& base, const ReproduceOptions& o) {
     request.quiet = o.quiet;
     request.command = "uavsim reproduce";
     const std::string scratch = (fs::path(dir) / "episodes" / (set + ".partial")).string();
-    if (coordinator && !o.quiet)
+    if (ranks.coordinator && !o.quiet)
       std::cerr << "uavsim reproduce: episode set " << set << " (" << p.episodes << " of "
                 << p.episode_s << " s)\n";
     request.wait = o.wait;
@@ -337,111 +351,116 @@ ReproduceOutcome RunReproduce(const Scenario& base, const ReproduceOptions& o) {
           fs::remove_all(scratch, ec);
           return scratch;
         },
-        world.get());
+        ranks.world.get());
     if (e) sets[set] = std::move(*e);
   }
+  return sets;
+}
 
-  // 2. The trainings, stage-1 arms first.
-  const auto episodes_of = [&](const std::string& set) -> const std::vector<pipeline::Episode>& {
-    auto it = sets.find(set);
-    if (it == sets.end())  // a rank other than 0: from DIR (a shared file system)
-      it = sets.emplace(set, pipeline::ReadEpisodes(SetFile(dir, set), core::ThrowIfInterrupted))
-               .first;
-    return it->second;
-  };
+// A set's episodes: those this process gathered, or (a rank other than 0)
+// read from DIR, a shared file system.
+const std::vector<pipeline::Episode>& EpisodesOf(EpisodeSets& sets, const std::string& dir,
+                                                 const std::string& set) {
+  auto it = sets.find(set);
+  if (it == sets.end())
+    it = sets.emplace(set, pipeline::ReadEpisodes(SetFile(dir, set), core::ThrowIfInterrupted))
+             .first;
+  return it->second;
+}
+
+// In the farm's child: trains arm `a` into model_dir.
+void TrainArm(const Scenario& base, const ReproducePlan& plan, const ReproduceOptions& o,
+              const std::string& dir, EpisodeSets& sets, const ReproduceArm& a,
+              const std::string& model_dir) {
+  const pipeline::Variant& v = *pipeline::FindVariant(a.variant);
+  const Scenario s = ArmScenario(base, a);
+  TrainCommand c;
+  c.out_dir = model_dir;
+  c.quiet = true;
+  c.seed = a.seed;
+  c.data_seed = plan.episodes.seed;
+  c.variant = a.variant;
+  c.mlp_bottleneck = v.mlp_bottleneck;
+  c.encoders_dir = a.encoders.empty() ? "" : ModelDir(dir, a.encoders);
+  c.paper_head = a.edge;
+  c.anchored_head = false;
+  c.score_classical = false;
+  c.split = a.frame_split ? pipeline::DataSplit::kFrame : pipeline::DataSplit::kTrajectory;
+  c.training = pipeline::ApplyVariant(v, plan.training);
+  c.command_line = o.command_line + " (training " + a.id + ")";
+  pipeline::InitTorch(1, a.seed);
+  TrainOnEpisodes(s, c, EpisodesOf(sets, dir, a.set), plan.episodes);
+}
+
+// The farm whose task i is the plan's arm i, in DIR/models/<arm>.
+ProcessFarm TrainingFarm(const Scenario& base, const ReproducePlan& plan, const ReproduceOptions& o,
+                         const std::string& dir, EpisodeSets& sets) {
   ProcessFarm farm;
   farm.command = "uavsim reproduce";
   farm.unit = "trainings";
-  farm.run = [&](std::size_t i, const std::string& model_dir) {
-    const ReproduceArm& a = plan.arms[i];
-    const pipeline::Variant& v = *pipeline::FindVariant(a.variant);
-    const Scenario s = ArmScenario(base, a);
-    TrainCommand c;
-    c.out_dir = model_dir;
-    c.quiet = true;
-    c.seed = a.seed;
-    c.data_seed = plan.episodes.seed;
-    c.variant = a.variant;
-    c.mlp_bottleneck = v.mlp_bottleneck;
-    c.encoders_dir = a.encoders.empty() ? "" : ModelDir(dir, a.encoders);
-    c.paper_head = a.edge;
-    c.anchored_head = false;
-    c.score_classical = false;
-    c.split = a.frame_split ? pipeline::DataSplit::kFrame : pipeline::DataSplit::kTrajectory;
-    c.training = pipeline::ApplyVariant(v, plan.training);
-    c.command_line = o.command_line + " (training " + a.id + ")";
-    pipeline::InitTorch(1, a.seed);
-    TrainOnEpisodes(s, c, episodes_of(a.set), plan.episodes);
+  farm.run = [&base, &plan, &o, &dir, &sets](std::size_t i, const std::string& model_dir) {
+    TrainArm(base, plan, o, dir, sets, plan.arms[i], model_dir);
   };
-  farm.describe = [&](std::size_t i) { return "training " + plan.arms[i].id; };
-  farm.local_dir = [&](std::size_t i) { return ModelDir(dir, plan.arms[i].id); };
-  farm.commit_remote = [&](std::size_t i, const TaskFiles& files) {
+  farm.describe = [&plan](std::size_t i) { return "training " + plan.arms[i].id; };
+  farm.local_dir = [&plan, &dir](std::size_t i) { return ModelDir(dir, plan.arms[i].id); };
+  farm.commit_remote = [&plan, &dir](std::size_t i, const TaskFiles& files) {
     results::RunDirectory run(ModelDir(dir, plan.arms[i].id), false);
     for (const auto& [path, bytes] : files) run.WriteText(path, bytes);
     run.Commit();
   };
-  FarmOptions fo;
-  fo.jobs = o.jobs;
-  fo.quiet = o.quiet;
-  fo.label = "reproduce " + base.name;
+  return farm;
+}
+
+// The arms of one round still to train: those that train stage 1 (reuse
+// false) or those that reuse them, whose encoders are done (the others
+// are counted as failed at the end); those already done counted into
+// *already_done.
+std::deque<std::size_t> ArmsToTrain(const ReproducePlan& plan, const std::string& dir, bool reuse,
+                                    std::size_t* already_done) {
+  std::deque<std::size_t> queue;
+  for (std::size_t i = 0; i < plan.arms.size(); ++i) {
+    const ReproduceArm& a = plan.arms[i];
+    if (a.encoders.empty() == reuse) continue;
+    if (ArmDone(dir, a.id)) {
+      ++*already_done;
+      continue;
+    }
+    if (reuse && !ArmDone(dir, a.encoders)) continue;  // its encoders failed: counted below
+    queue.push_back(i);
+  }
+  return queue;
+}
+
+// The trainings in two rounds, the arms that train stage 1, then those
+// that reuse them: here, or handed out to the ranks under MPI.
+void RunTrainings(const ReproducePlan& plan, const std::string& dir, const ProcessFarm& farm,
+                  const FarmOptions& fo, const Ranks& ranks, ReproduceOutcome& out) {
   const auto add = [&out](const FarmCounts& c) {
     out.ran += c.ran;
     out.failed += c.failed;
   };
-  const auto wall = [&] {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-  };
-  try {
-    // Two rounds: the arms that train stage 1, then those that reuse them.
-    for (const bool reuse : {false, true}) {
-      if (!coordinator) {
-        if (world) world->barrier();
-        add(RunFarmWorker(*world, farm, fo));
-        continue;
-      }
-      std::deque<std::size_t> queue;
-      for (std::size_t i = 0; i < plan.arms.size(); ++i) {
-        const ReproduceArm& a = plan.arms[i];
-        if (a.encoders.empty() == reuse) continue;
-        if (ArmDone(dir, a.id)) {
-          ++out.already_done;
-          continue;
-        }
-        if (reuse && !ArmDone(dir, a.encoders)) continue;  // its encoders failed: counted below
-        queue.push_back(i);
-      }
-      if (world) {
-        world->barrier();
-        add(RunFarmCoordinator(*world, farm, std::move(queue), fo));
-      } else {
-        add(RunFarmLocal(farm, std::move(queue), fo));
-      }
+  for (const bool reuse : {false, true}) {
+    if (!ranks.coordinator) {
+      if (ranks.world) ranks.world->barrier();
+      add(RunFarmWorker(*ranks.world, farm, fo));
+      continue;
     }
-  } catch (const core::Interrupted&) {
-    if (coordinator) LogInvocation(dir, started_utc, wall(), o.jobs, out.ran, "interrupted");
-    if (world) {
-      std::cerr << "uavsim: interrupted; finished trainings are kept\n";
-      world->abort(130);
+    std::deque<std::size_t> queue = ArmsToTrain(plan, dir, reuse, &out.already_done);
+    if (ranks.world) {
+      ranks.world->barrier();
+      add(RunFarmCoordinator(*ranks.world, farm, std::move(queue), fo));
+    } else {
+      add(RunFarmLocal(farm, std::move(queue), fo));
     }
-    throw;
   }
-  if (!coordinator) {
-    out.mpi_worker = true;
-    return out;
-  }
-  std::size_t missing = 0;
-  for (const ReproduceArm& a : plan.arms) missing += !ArmDone(dir, a.id);
-  out.failed = std::max(out.failed, missing);
-  if (out.failed > 0) {
-    out.wall_s = wall();
-    LogInvocation(dir, started_utc, out.wall_s, o.jobs, out.ran, "failed");
-    return out;
-  }
+}
 
-  // 3. Tab. II's runs, then every artefact and the report.
+// Tab. II's runs, then every artefact and the report.
+void Report(const Scenario& base, const ReproducePlan& plan, const ReproduceOptions& o,
+            const std::string& dir, const Invocation& invocation, ReproduceOutcome& out) {
   RunDataRates(base, plan, dir, o.quiet);
-  out.wall_s = wall();
-  LogInvocation(dir, started_utc, out.wall_s, o.jobs, out.ran, "reported");
+  out.wall_s = invocation.WallS();
+  LogInvocation(dir, invocation.started_utc, out.wall_s, o.jobs, out.ran, "reported");
   ReproduceReportInputs in;
   in.dir = dir;
   in.scenario = &base;
@@ -451,6 +470,58 @@ ReproduceOutcome RunReproduce(const Scenario& base, const ReproduceOptions& o) {
   in.trained_now = out.ran;
   out.warnings = WriteReproduceReport(in);
   out.reported = true;
+}
+
+}  // namespace
+
+ReproduceOutcome RunReproduce(const Scenario& base, const ReproduceOptions& o) {
+  const Invocation invocation;
+  if (o.jobs < 1) throw core::UsageError("uavsim reproduce: --jobs needs at least 1");
+  const ReproducePlan plan = MakeReproducePlan(base, o);
+  if (plan.episodes.episodes < 3)
+    throw core::UsageError("uavsim reproduce: --episodes needs at least 3");
+  ReproduceOutcome out;
+  out.arms = plan.arms.size();
+  const std::string dir = fs::absolute(o.out_dir).string();
+  const Ranks ranks;
+
+  // 1. The episode sets; rank 0 holds DIR's lock from its first preparation to the end.
+  std::optional<core::FileLock> lock;
+  EpisodeSets sets = SimulateEpisodeSets(base, plan, o, dir, ranks, lock);
+
+  // 2. The trainings, stage-1 arms first.
+  const ProcessFarm farm = TrainingFarm(base, plan, o, dir, sets);
+  FarmOptions fo;
+  fo.jobs = o.jobs;
+  fo.quiet = o.quiet;
+  fo.label = "reproduce " + base.name;
+  try {
+    RunTrainings(plan, dir, farm, fo, ranks, out);
+  } catch (const core::Interrupted&) {
+    if (ranks.coordinator)
+      LogInvocation(dir, invocation.started_utc, invocation.WallS(), o.jobs, out.ran,
+                    "interrupted");
+    if (ranks.world) {
+      std::cerr << "uavsim: interrupted; finished trainings are kept\n";
+      ranks.world->abort(130);
+    }
+    throw;
+  }
+  if (!ranks.coordinator) {
+    out.mpi_worker = true;
+    return out;
+  }
+  std::size_t missing = 0;
+  for (const ReproduceArm& a : plan.arms) missing += !ArmDone(dir, a.id);
+  out.failed = std::max(out.failed, missing);
+  if (out.failed > 0) {
+    out.wall_s = invocation.WallS();
+    LogInvocation(dir, invocation.started_utc, out.wall_s, o.jobs, out.ran, "failed");
+    return out;
+  }
+
+  // 3. Every artefact and the report.
+  Report(base, plan, o, dir, invocation, out);
   return out;
 }
 

@@ -6,9 +6,9 @@
 #include <map>
 #include <sstream>
 
-#include "results/csv.h"
 #include "core/error.h"
 #include "core/json_io.h"
+#include "results/csv.h"
 
 namespace uavsim::sim {
 namespace {
@@ -104,6 +104,19 @@ SeedStat AsWritten(const SeedStat& d) {
 
 }  // namespace
 
+const std::vector<std::string>& ModalitySubsets() {
+  static const std::vector<std::string> s = {
+      "all", "camera+lidar", "camera+radar", "lidar+radar", "camera", "lidar", "radar"};
+  return s;
+}
+
+std::string MeanCiText(const SeedStat& s, int decimals) {
+  if (s.n == 0) return "-";
+  std::string t = results::FormatFixed(s.mean, decimals);
+  if (std::isfinite(s.ci95)) t += " ± " + results::FormatFixed(s.ci95, decimals);
+  return t;
+}
+
 double ArtefactMargin(const std::string& dir, const std::string& artefact, bool frame,
                       double fraction) {
   const std::vector<Source> sources = SourcesOf(artefact, frame);
@@ -144,11 +157,10 @@ void JudgeClaims(const std::string& dir, double fraction, std::vector<ReproduceC
       cmp.verdict = JudgeComparison(cmp.comparison.diff, cmp.margin);
       split[cmp.frame].push_back(cmp.verdict.outcome);
     }
-    const bool most = MostCasesClaim(c.paper);
-    c.verdict = ClaimVerdict(split[0], most, &c.detail);
+    c.verdict = ClaimVerdict(split[0], c.most, &c.detail);
     if (!split[1].empty())
-      c.frame_verdict =
-          ClaimVerdict(split[1], most, nullptr) + (c.frame_note.empty() ? "" : " " + c.frame_note);
+      c.frame_verdict = ClaimVerdict(split[1], c.most, nullptr) +
+                        (c.frame_note.empty() ? "" : " " + c.frame_note);
   }
 }
 
@@ -196,6 +208,7 @@ std::vector<ReproduceClaim> ReadClaimsCsv(const std::string& file) {
       c.artefact = at("artefact"), c.paper = at("claim"), c.ours = at("ours");
       c.verdict = at("verdict"), c.detail = at("detail");
       c.frame_verdict = at("frame_split_verdict");
+      c.most = MostCasesClaim(c.paper);
     }
     ReproduceClaim& c = claims.back();
     if (at("comparison").empty()) continue;  // a criterion's claim

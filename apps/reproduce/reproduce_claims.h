@@ -29,12 +29,23 @@ struct ReproduceClaim {
   std::string artefact;  // "Fig. 12"
   std::string paper;     // what the paper says
   std::string ours;      // our numbers in a phrase
+  // "In most cases": more than half of the comparisons must hold, none
+  // reversed (ClaimVerdict); else all must.
+  bool most = false;
   // Empty: judged by a criterion, whose verdict and detail are set directly.
   std::vector<ClaimComparison> comparisons;
   std::string verdict, detail;  // holds / does not hold / not resolved / mixed
   std::string frame_verdict;    // Fig. 10a's frame split ("" when not measured)
   std::string frame_note;       // what follows it: "(all 4.71 ± 1.63 m)"
 };
+
+// The modality subsets in the order of the paper's figures: "all",
+// "camera+lidar", "camera+radar", "lidar+radar", "camera", "lidar", "radar".
+const std::vector<std::string>& ModalitySubsets();
+
+// "6.82 ± 0.41": the mean and 95 % half-width to `decimals` ("6.82" for
+// one seed, "-" for none).
+std::string MeanCiText(const SeedStat& s, int decimals = 2);
 
 // The equivalence margin of an artefact: `fraction` times the mean of the
 // values its claims compare, over the artefact's table in DIR (the RMSE
@@ -46,10 +57,10 @@ double ArtefactMargin(const std::string& dir, const std::string& artefact, bool 
                       double fraction);
 
 // Every comparison's margin and verdict, then every claim's verdict and
-// detail from its comparisons (the frame split's into frame_verdict);
-// claims without comparisons are left as they are. Each difference is
-// first rounded as claims.csv writes it (mean and half-width to 6
-// decimals, the sd from the half-width), so that judging from the
+// detail from its comparisons by its rule (`most`), the frame split's into
+// frame_verdict; claims without comparisons are left as they are. Each
+// difference is first rounded as claims.csv writes it (mean and half-width
+// to 6 decimals, the sd from the half-width), so that judging from the
 // trainings and redrawing from claims.csv give the same bytes.
 void JudgeClaims(const std::string& dir, double fraction, std::vector<ReproduceClaim>& claims);
 
@@ -61,7 +72,9 @@ void JudgeClaims(const std::string& dir, double fraction, std::vector<ReproduceC
 std::string ClaimsCsv(const std::vector<ReproduceClaim>& claims);
 // The claims of a claims.csv (written by ClaimsCsv or by the three-outcome
 // reports before it, which lack the last four columns), with each
-// comparison's statistics (sd from the half-width), not yet judged.
+// comparison's statistics (sd from the half-width), not yet judged; the
+// rule (`most`) from the claim's words (MostCasesClaim), as claims.csv has
+// no column for it.
 // Throws core::UsageError naming the file and line.
 std::vector<ReproduceClaim> ReadClaimsCsv(const std::string& file);
 

@@ -27,7 +27,9 @@
 // the rules of apps/reproduce/reproduce_verdict.h (holds, reversed, no effect against
 // the artefact's equivalence margin, not resolved, with the seeds a
 // comparison not resolved would need), and the claims from their
-// comparisons (apps/reproduce/reproduce_claims.h).
+// comparisons (apps/reproduce/reproduce_claims.h). The claims are the rows
+// of the paper's claim table (apps/reproduce/reproduce_claim_table.h), in
+// its order, each reading what the artefacts measured.
 #pragma once
 
 #include <cstddef>
@@ -52,7 +54,8 @@ struct ReproduceReportInputs {
 
 // Writes every artefact and the reports. Returns warnings (a figure not
 // drawn: gnuplot missing, ...). Throws std::runtime_error when a training's
-// files are missing or unreadable.
+// files are missing or unreadable, std::logic_error when a row of the claim
+// table reads what no artefact measures.
 std::vector<std::string> WriteReproduceReport(const ReproduceReportInputs& in);
 
 // Redraws the verdicts of a reproduction folder from what it keeps (a
