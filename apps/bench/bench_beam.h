@@ -13,16 +13,18 @@ namespace uavsim::sim {
 // and DFT beams; and whole DownlinkScorer windows (channel once, then the
 // perfect, two method and three DFT beams, and the rate at 21 SNR points).
 // The UAV flies the default 25 m orbit around the default base station and
-// the estimates carry 1 m of noise, from a fixed-seed RngStream, so every run
-// evaluates the same beams. The world is a closed-form oracle that blocks
-// nothing: the engine's Embree queries (1 per direct path, 2 per candidate
-// reflection) come on top and are measured by `uavsim bench raycast`.
+// the estimates carry 1 m of noise, from a fixed-seed RngStream: 4096 samples
+// along the orbit, evaluated in whole sweeps, so every run evaluates the same
+// beams. The world is a closed-form oracle that blocks nothing: the engine's
+// Embree queries (1 per direct path, 2 per candidate reflection) come on top
+// and are measured by `uavsim bench raycast`.
 //
-// Wall time by std::chrono::steady_clock over the timed loop only, after an
-// untimed warm-up of a tenth of the evaluations. Writes a table to `out`:
-// array, paths, beam, evaluations, seconds, thousand evaluations per second,
-// mean gamma (a checksum: it also keeps the work from being optimised away).
-// With `quiet` only the table. Takes a few seconds. Returns 0.
+// Google Benchmark times the evaluations (wall clock) for at least 0.5 s per
+// row after a warm-up of 0.05 s (both rounded up to whole sweeps). Writes a
+// table to `out`: array, paths, beam, evaluations timed, seconds, thousand
+// evaluations per second, mean gamma over the timed evaluations (a checksum;
+// the scorer rows: over every window scored). With `quiet` only the table.
+// Takes several seconds. Returns 0.
 int BenchBeam(bool quiet, std::ostream& out);
 
 }  // namespace uavsim::sim

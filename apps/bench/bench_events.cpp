@@ -1,7 +1,6 @@
 #include "apps/bench/bench_events.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -11,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "apps/bench/gbench.h"
 #include "core/rng.h"
 #include "core/simulator.h"
 #include "core/time.h"
@@ -21,7 +21,10 @@ namespace {
 using core::SimTime;
 
 constexpr std::uint64_t kSeed = 1;
-constexpr std::uint64_t kEventsPerRun = 10'000'000;
+// Google Benchmark's iteration: a batch of events, about 3-20 ms.
+constexpr std::uint64_t kEventsPerIteration = 100'000;
+constexpr std::uint64_t kWarmupEvents = 1'000'000;
+constexpr double kMinTimeS = 0.4;
 
 // The naive alternative: a binary heap of std::function, as a DES written in
 // an afternoon would have it. Same interface as core::Simulator for Hold.
@@ -88,25 +91,38 @@ struct Row {
   std::size_t pending;
   std::uint64_t events;
   double seconds;
+  double events_per_s;
 };
 
+// Prefills `pending` events and runs an untimed warm-up (ns-3 primes too):
+// the queue's buffers reach their steady size, so the timed part measures
+// events, not page faults. Then Google Benchmark times batches of
+// kEventsPerIteration events of the same hold model.
 template <typename Sim>
-Row RunHold(const char* name, double mean_delay_ns, std::size_t pending, std::uint64_t events) {
+Row RunHold(const char* name, double mean_delay_ns, std::size_t pending) {
   Sim sim;
-  // Untimed warm-up (ns-3 primes too): the queue's buffers reach their steady
-  // size, so the timed part measures events, not page faults.
-  const std::uint64_t warmup = std::max<std::uint64_t>(pending, events / 10);
+  const std::uint64_t warmup = std::max<std::uint64_t>(pending, kWarmupEvents);
   Hold<Sim> hold{&sim, core::RngStream(kSeed, "bench/events"), 0, warmup, mean_delay_ns};
   for (std::size_t i = 0; i < pending; ++i) {
     sim.ScheduleAt(hold.Delay(), [h = &hold] { Hold<Sim>::Event(h); });
   }
   sim.Run();
-  hold.total += events;
-  const auto start = std::chrono::steady_clock::now();
-  sim.Run();
-  const auto stop = std::chrono::steady_clock::now();
-  return Row{name, mean_delay_ns, pending, hold.executed - warmup,
-             std::chrono::duration<double>(stop - start).count()};
+  gbench::Register(name,
+                   [&](benchmark::State& state) {
+                     for (auto _ : state) {
+                       hold.total += kEventsPerIteration;
+                       sim.Run();
+                     }
+                     state.counters["events"] =
+                         benchmark::Counter(static_cast<double>(kEventsPerIteration),
+                                            benchmark::Counter::kIsIterationInvariantRate);
+                   })
+      ->Unit(benchmark::kMillisecond)
+      ->MinTime(kMinTimeS);
+  const gbench::Measurement m = gbench::RunSingle().Fastest();
+  return Row{name,        mean_delay_ns,
+             pending,     static_cast<std::uint64_t>(m.iterations) * kEventsPerIteration,
+             m.seconds(), m.Counter("events")};
 }
 
 void PrintRow(std::ostream& out, const Row& row) {
@@ -116,8 +132,7 @@ void PrintRow(std::ostream& out, const Row& row) {
               : std::to_string(static_cast<int>(row.mean_delay_ns)) + " ns")
       << std::setw(9) << row.pending << std::setw(11) << row.events << std::fixed
       << std::setprecision(3) << std::setw(9) << row.seconds << std::setprecision(2)
-      << std::setw(12) << static_cast<double>(row.events) / row.seconds * 1e-6 << std::defaultfloat
-      << '\n'
+      << std::setw(12) << row.events_per_s * 1e-6 << std::defaultfloat << '\n'
       << std::flush;
 }
 
@@ -134,11 +149,10 @@ int BenchEvents(bool quiet, std::ostream& out) {
       << std::setw(12) << "M events/s" << '\n';
   for (double mean_delay_ns : {100.0, 1e6}) {
     for (std::size_t pending : {1'000, 10'000, 100'000, 1'000'000}) {
-      PrintRow(out,
-               RunHold<core::Simulator>("core::Simulator", mean_delay_ns, pending, kEventsPerRun));
+      PrintRow(out, RunHold<core::Simulator>("core::Simulator", mean_delay_ns, pending));
     }
-    PrintRow(out, RunHold<PlainQueue>("std::priority_queue<std::function>", mean_delay_ns, 100'000,
-                                      kEventsPerRun));
+    PrintRow(out,
+             RunHold<PlainQueue>("std::priority_queue<std::function>", mean_delay_ns, 100'000));
   }
   return 0;
 }

@@ -16,14 +16,15 @@ namespace uavsim::sim {
 //   edge window (EdgeLocalizer::OnWindow: TE-Align, MADW, MICA, Mamba, head;
 //     z = 16, t^w = 0.2 s) fed the latents the default scenario's sensors send
 //     in one window: 6 camera (30 Hz), 2 LiDAR (10 Hz), 3 radar (15 Hz)
-// Each case is warmed up, then called one at a time until at least a second
-// has passed (and at least 100 calls); each call's wall time is taken with
-// std::chrono::steady_clock. One table row per case: median, mean and 95th
-// percentile wall ms per call, mean thread CPU ms per call, calls per second
-// (1000 / mean), the target (issue: encode <= 5 ms per frame on one core;
-// edge <= 1 ms per window) and the paper's Raspberry Pi 5 figure (camera
-// 0.02 s, point cloud 0.09 s, for its whole node pipeline: pre-processing
-// and encoder). With `quiet` only the table is written. Returns 0.
+// Google Benchmark runs each case for a warm-up of 0.1 s, then times each
+// call as a repetition of one iteration, max(100, 1 s / mean call time) of
+// them, so every call's wall time is taken. One table row per case: calls
+// timed, median, mean and 95th percentile wall ms per call, mean thread CPU
+// ms per call, calls per second (1000 / mean), the target (issue: encode
+// <= 5 ms per frame on one core; edge <= 1 ms per window) and the paper's
+// Raspberry Pi 5 figure (camera 0.02 s, point cloud 0.09 s, for its whole
+// node pipeline: pre-processing and encoder). With `quiet` only the table is
+// written. Returns 0.
 int BenchPipeline(bool quiet, std::ostream& out);
 
 }  // namespace uavsim::sim

@@ -2,9 +2,11 @@
 
 #include <tbb/global_control.h>
 
-#include <chrono>
+#include <functional>
 #include <iomanip>
+#include <string>
 
+#include "apps/bench/gbench.h"
 #include "sensors/fmcw_radar.h"
 #include "sensors/radar_processor.h"
 #include "sim/world_model.h"
@@ -12,14 +14,18 @@
 namespace uavsim::sim {
 namespace {
 
-using Clock = std::chrono::steady_clock;
+constexpr double kMinTimeS = 0.1;
 
-template <class F>
-double MillisecondsPerCall(F&& body, int calls) {
-  body();
-  const auto start = Clock::now();
-  for (int i = 0; i < calls; ++i) body();
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count() / calls;
+// Wall milliseconds per call of `body`, timed by Google Benchmark for at
+// least kMinTimeS (its first, discarded runs warm up).
+double MillisecondsPerCall(const std::string& name, const std::function<void()>& body) {
+  gbench::Register(name,
+                   [&body](benchmark::State& state) {
+                     for (auto _ : state) body();
+                   })
+      ->Unit(benchmark::kMillisecond)
+      ->MinTime(kMinTimeS);
+  return gbench::RunSingle().Fastest().real_s_per_iteration * 1e3;
 }
 
 }  // namespace
@@ -53,15 +59,14 @@ int BenchRadar(bool quiet, std::ostream& out) {
     core::RngStream noise(1, "bench/radar");
     std::vector<sensors::Scatterer> scatterers;
     sensors::RadarCube cube;
-    const int calls = 30;
     const double find_ms =
-        MillisecondsPerCall([&] { scatterers = radar.FindScatterers(t_s, uav); }, calls);
-    const double uncached_ms =
-        MillisecondsPerCall([&] { uncached.FindScatterers(t_s, uav); }, calls);
+        MillisecondsPerCall("find", [&] { scatterers = radar.FindScatterers(t_s, uav); });
+    const double uncached_ms = MillisecondsPerCall(
+        "find, no cache", [&] { benchmark::DoNotOptimize(uncached.FindScatterers(t_s, uav)); });
     const double synth_ms =
-        MillisecondsPerCall([&] { cube = radar.Synthesize(scatterers, weather, noise); }, calls);
-    const double proc_ms =
-        MillisecondsPerCall([&] { processor.Process(cube, radar.X_WR(), t_s); }, calls);
+        MillisecondsPerCall("synth", [&] { cube = radar.Synthesize(scatterers, weather, noise); });
+    const double proc_ms = MillisecondsPerCall(
+        "process", [&] { benchmark::DoNotOptimize(processor.Process(cube, radar.X_WR(), t_s)); });
     out << std::left << std::setw(12) << (rain > 0 ? "rain 25" : "dry") << std::right
         << std::setw(12) << scatterers.size() << std::fixed << std::setprecision(2) << std::setw(14)
         << find_ms << std::setw(18) << uncached_ms << std::setw(14) << synth_ms << std::setw(14)
