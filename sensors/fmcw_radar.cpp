@@ -13,6 +13,7 @@
 #include <limits>
 #include <mutex>
 #include <numeric>
+#include <optional>
 #include <stdexcept>
 #include <tuple>
 #include <unordered_map>
@@ -105,6 +106,270 @@ struct SurfaceTerms {
     return sigma0;
   }
 };
+
+// A grid cell no hit or sphere asked to refine.
+constexpr double kNotRefined = std::numeric_limits<double>::infinity();
+
+// Hits summed in power within merge cells (header: "Merging"): object,
+// range, the two direction cosines and velocity (the static world has no
+// velocity). Cells are hashed, so a fine merge costs memory by the hits, not
+// by the cells.
+class ScattererMerge {
+ public:
+  ScattererMerge(const FmcwRadarConfig& c, const RaycastScene& scene, const Eigen::Vector3d& origin,
+                 const Eigen::Matrix3d& R_RW, double max_range_m, double range_bin_m,
+                 double velocity_bin_mps, double t_s)
+      : scene_(scene), origin_(origin), R_RW_(R_RW), max_range_m_(max_range_m), t_s_(t_s) {
+    const double f = c.merge_cell_fraction;
+    cell_r_ = f * range_bin_m;
+    cell_uy_ = f / (c.nx * c.spacing_x_wavelengths);
+    cell_uz_ = f / (c.ny * c.spacing_y_wavelengths);
+    cell_v_ = f * velocity_bin_mps;
+    for (std::size_t k = 0; k < kRadarClasses; ++k)
+      terms_[k] = SurfaceTerms(SurfaceOf(c.surfaces, static_cast<core::RadarClass>(k)));
+  }
+
+  // The hit of a ray along dir_w that stands for solid_angle_sr.
+  void Add(const Eigen::Vector3f& dir_w, double solid_angle_sr, const RayHit& hit) {
+    if (!hit.hit() || hit.t <= 0.0f) return;
+    const Eigen::Vector3d u = dir_w.cast<double>().normalized();
+    const double range_m = hit.t * static_cast<double>(dir_w.norm());
+    if (range_m >= max_range_m_) return;
+    const double cos_i = std::abs(static_cast<double>(hit.normal_w.dot(dir_w.normalized())));
+    const SurfaceTerms& surface =
+        terms_[static_cast<std::size_t>(scene_.material(hit.material).radar_class)];
+    const double area_m2 = range_m * range_m * solid_angle_sr;
+    // sigma = A sigma0 / cos: the limit at grazing incidence is A gamma.
+    const double rcs =
+        cos_i > 1e-6 ? area_m2 * surface.Sigma0(cos_i) / cos_i : area_m2 * surface.gamma;
+    if (!(rcs > 0.0)) return;
+    Eigen::Vector3d v = Eigen::Vector3d::Zero();
+    if (hit.object > 0) v = scene_.PointVelocity(hit.object, origin_ + range_m * u, t_s_);
+    const Eigen::Vector3d u_R = R_RW_ * u;
+    const CellKey key = {hit.object, static_cast<std::int64_t>(range_m / cell_r_),
+                         static_cast<std::int64_t>(std::floor(u_R.y() / cell_uy_)),
+                         static_cast<std::int64_t>(std::floor(u_R.z() / cell_uz_)),
+                         static_cast<std::int64_t>(std::floor(v.dot(u) / cell_v_))};
+    const auto [it, added] = cell_index_.emplace(key, sums_.size());
+    if (added) {
+      keys_.push_back(key);
+      sums_.emplace_back();
+    }
+    Sum& sum = sums_[it->second];
+    sum.rcs += rcs;
+    sum.rcs_range += rcs * range_m;
+    sum.rcs_u += rcs * u;
+    sum.rcs_v += rcs * v;
+  }
+
+  // One scatterer per cell: the summed RCS at the RCS-weighted mean range
+  // along the RCS-weighted mean direction, with the RCS-weighted mean
+  // velocity. Cell order: the static world (object 0) first, then each
+  // moving object.
+  std::vector<Scatterer> Scatterers() const {
+    std::vector<std::size_t> cells(sums_.size());
+    std::iota(cells.begin(), cells.end(), 0);
+    std::sort(cells.begin(), cells.end(),
+              [&](std::size_t a, std::size_t b) { return keys_[a] < keys_[b]; });
+    std::vector<Scatterer> out;
+    out.reserve(cells.size());
+    for (std::size_t k : cells) {
+      const Sum& s = sums_[k];
+      Scatterer x;
+      x.position_m = origin_ + s.rcs_range / s.rcs * s.rcs_u.normalized();
+      x.velocity_mps = s.rcs_v / s.rcs;
+      x.rcs_m2 = s.rcs;
+      x.object = static_cast<std::int32_t>(keys_[k][0]);
+      out.push_back(x);
+    }
+    return out;
+  }
+
+ private:
+  using CellKey = std::array<std::int64_t, 5>;
+  struct CellHash {
+    std::size_t operator()(const CellKey& k) const {
+      std::uint64_t h = 0;
+      for (std::int64_t x : k) h = core::Mix64(h ^ static_cast<std::uint64_t>(x));
+      return static_cast<std::size_t>(h);
+    }
+  };
+  struct Sum {
+    double rcs = 0.0, rcs_range = 0.0;
+    Eigen::Vector3d rcs_u = Eigen::Vector3d::Zero();
+    Eigen::Vector3d rcs_v = Eigen::Vector3d::Zero();
+  };
+
+  const RaycastScene& scene_;
+  Eigen::Vector3d origin_;
+  Eigen::Matrix3d R_RW_;
+  double max_range_m_, t_s_;
+  double cell_r_ = 0.0, cell_uy_ = 0.0, cell_uz_ = 0.0, cell_v_ = 0.0;
+  std::array<SurfaceTerms, kRadarClasses> terms_;
+  std::unordered_map<CellKey, std::size_t, CellHash> cell_index_;
+  std::vector<CellKey> keys_;
+  std::vector<Sum> sums_;
+};
+
+// Reflectivity-weighted drop diameters at which the rain's fall speeds are taken.
+constexpr int kDropNodes = 16;
+
+// The rain clutter's visibility rays: a kRainRayStepDeg grid over the field
+// of view, each with its direction in R, its solid angle and its hit.
+struct RainView {
+  std::vector<Ray> rays;
+  std::vector<double> omega;
+  std::vector<Eigen::Vector3d> dirs_R;
+  std::vector<RayHit> hits;
+};
+
+RainView CastRainView(const FmcwRadarConfig& c, const RaycastScene& scene,
+                      const Eigen::Isometry3d& X_WR, double max_range_m) {
+  const Eigen::Vector3d o = X_WR.translation();
+  const Eigen::Matrix3d R_WR = X_WR.linear();
+  const int n_az = std::max(1, static_cast<int>(std::ceil(c.fov_azimuth_deg / kRainRayStepDeg)));
+  const int n_el = std::max(1, static_cast<int>(std::ceil(c.fov_elevation_deg / kRainRayStepDeg)));
+  const double d_az = c.fov_azimuth_deg * kPi / 180.0 / n_az;
+  const double d_el = c.fov_elevation_deg * kPi / 180.0 / n_el;
+  const std::size_t n_rays = static_cast<std::size_t>(n_az) * n_el;
+  RainView view;
+  std::vector<Ray>& rays = view.rays;
+  std::vector<double>& omega = view.omega;
+  std::vector<Eigen::Vector3d>& dirs_R = view.dirs_R;
+  std::vector<RayHit>& hits = view.hits;
+  rays.resize(n_rays);
+  omega.resize(n_rays);
+  dirs_R.resize(n_rays);
+  for (int j = 0; j < n_el; ++j) {
+    const double el_lo = -0.5 * c.fov_elevation_deg * kPi / 180.0 + j * d_el;
+    const double el = el_lo + 0.5 * d_el;
+    for (int i = 0; i < n_az; ++i) {
+      const double az = -0.5 * c.fov_azimuth_deg * kPi / 180.0 + (i + 0.5) * d_az;
+      const std::size_t k = static_cast<std::size_t>(j) * n_az + i;
+      dirs_R[k] = {std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el)};
+      // dOmega = d_az (sin el_hi - sin el_lo)
+      omega[k] = d_az * (std::sin(el_lo + d_el) - std::sin(el_lo));
+      rays[k] = {o.cast<float>(), (R_WR * dirs_R[k]).cast<float>(), 1e-3f,
+                 static_cast<float>(max_range_m)};
+    }
+  }
+  hits.resize(n_rays);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n_rays, kBlockRays),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      scene.IntersectMany(&rays[r.begin()], &hits[r.begin()], r.size());
+                    });
+  return view;
+}
+
+// Fall speeds: 16 equal-weight quantiles of the reflectivity-weighted drop
+// diameter, D^6 exp(-Lambda D), i.e. D ~ Gamma(7, 1 / Lambda).
+std::array<double, kDropNodes> RainFallSpeeds(double rain_mm_h) {
+  const double lambda_per_mm = 4.1 * std::pow(rain_mm_h, -0.21);  // Marshall-Palmer
+  std::array<double, kDropNodes> fall_mps{};
+  for (int q = 0; q < kDropNodes; ++q) {
+    const double p = (q + 0.5) / kDropNodes;
+    auto gamma7_cdf = [](double x) {
+      double term = 1.0, sum = 1.0;
+      for (int k = 1; k < 7; ++k) sum += (term *= x / k);
+      return 1.0 - std::exp(-x) * sum;
+    };
+    double lo = 0.0, hi = 60.0;
+    for (int it = 0; it < 60; ++it) (gamma7_cdf(0.5 * (lo + hi)) < p ? lo : hi) = 0.5 * (lo + hi);
+    const double d_mm = 0.5 * (lo + hi) / lambda_per_mm;
+    fall_mps[q] = std::max(0.0, 9.65 - 10.3 * std::exp(-0.6 * d_mm));  // Atlas et al. 1973
+  }
+  return fall_mps;
+}
+
+// Solid angle of rain visible at each range bin from first_bin on, per
+// Doppler bin (index b * nc + d), and each direction's rain power weight
+// (for the spatial covariance) into power_weight.
+std::vector<double> RainSpectrum(const FmcwRadar& radar, const RainView& view,
+                                 const std::array<double, kDropNodes>& fall_mps, int first_bin,
+                                 std::vector<double>& power_weight) {
+  const FmcwRadarConfig& c = radar.config();
+  const int ns = c.adc_samples, nc = c.chirps_per_frame;
+  const double range_bin_m = radar.range_bin_m();
+  const std::size_t n_rays = view.rays.size();
+  // Solid angle of rain per (last visible bin, Doppler bin); a suffix sum
+  // over bins then gives the solid angle visible at each bin, per Doppler.
+  std::vector<double> spectrum(static_cast<std::size_t>(ns) * nc, 0.0);
+  power_weight.assign(n_rays, 0.0);
+  const double r_first = std::max(c.rain_clutter_min_range_m, (first_bin - 0.5) * range_bin_m);
+  for (std::size_t k = 0; k < n_rays; ++k) {
+    const double free_m = view.hits[k].hit() ? view.hits[k].t : radar.max_range_m();
+    const int last = std::min(ns - 1, static_cast<int>(std::ceil(free_m / range_bin_m)) - 1);
+    if (last < first_bin) continue;
+    power_weight[k] = view.omega[k] * (1.0 / r_first - 1.0 / ((last + 0.5) * range_bin_m));
+    const double up = view.rays[k].direction.cast<double>().z();
+    for (int q = 0; q < kDropNodes; ++q) {
+      // Radial velocity of a drop falling along -z, in Doppler bins.
+      const double x = -fall_mps[q] * up / radar.velocity_bin_mps();
+      const double lo = std::floor(x), frac = x - lo;
+      const int d0 = ((static_cast<int>(lo) % nc) + nc) % nc, d1 = (d0 + 1) % nc;
+      const double w = view.omega[k] / kDropNodes;
+      spectrum[static_cast<std::size_t>(last) * nc + d0] += w * (1.0 - frac);
+      spectrum[static_cast<std::size_t>(last) * nc + d1] += w * frac;
+    }
+  }
+  for (int b = ns - 2; b >= first_bin; --b)
+    for (int d = 0; d < nc; ++d)
+      spectrum[static_cast<std::size_t>(b) * nc + d] +=
+          spectrum[static_cast<std::size_t>(b + 1) * nc + d];
+  return spectrum;
+}
+
+// The standard deviation of Re and Im of each rain cell (index d * ns + b).
+// Cell variance: eta (visible solid angle) integral of R^2 dR over the bin
+// at SNR per m^2 snr_scale L(R) / R^4.
+std::vector<float> RainCellSigma(const FmcwRadar& radar, double rain_mm_h, double eta,
+                                 int first_bin, const std::vector<double>& spectrum) {
+  const FmcwRadarConfig& c = radar.config();
+  const int ns = c.adc_samples, nc = c.chirps_per_frame;
+  const double range_bin_m = radar.range_bin_m();
+  std::vector<float> sigma(static_cast<std::size_t>(ns) * nc, 0.0f);
+  for (int b = first_bin; b < ns; ++b) {
+    const double r_lo = std::max(c.rain_clutter_min_range_m, (b - 0.5) * range_bin_m);
+    const double r_hi = (b + 0.5) * range_bin_m;
+    if (r_hi <= r_lo) continue;
+    const double per_sr = eta * radar.SnrPerSample(1.0, 0.5 * (r_lo + r_hi), rain_mm_h) *
+                          std::pow(0.5 * (r_lo + r_hi), 4) * (1.0 / r_lo - 1.0 / r_hi);
+    for (int d = 0; d < nc; ++d)
+      sigma[static_cast<std::size_t>(d) * ns + b] = static_cast<float>(
+          std::sqrt(0.5 * per_sr * spectrum[static_cast<std::size_t>(b) * nc + d]));
+  }
+  return sigma;
+}
+
+// Spatial covariance of the elements under rain from the visible
+// directions, R_ab = sum w e^{j 2 pi (p_a - p_b) . u / lambda} / sum w, and
+// its Cholesky factor, which imposes it on independent fields; none when no
+// direction sees rain.
+std::optional<Eigen::MatrixXcd> RainSpatialMix(const FmcwRadarConfig& c, const RainView& view,
+                                               const std::vector<double>& power_weight) {
+  const int antennas = c.nx * c.ny;
+  Eigen::MatrixXcd cov = Eigen::MatrixXcd::Zero(antennas, antennas);
+  double weight_sum = 0.0;
+  Eigen::VectorXcd steer(antennas);
+  for (std::size_t k = 0; k < view.rays.size(); ++k) {
+    if (power_weight[k] <= 0.0) continue;
+    const std::complex<double> ex =
+        Phasor(2.0 * kPi * c.spacing_x_wavelengths * view.dirs_R[k].y());
+    const std::complex<double> ey =
+        Phasor(2.0 * kPi * c.spacing_y_wavelengths * view.dirs_R[k].z());
+    std::complex<double> py = 1.0;
+    for (int iy = 0; iy < c.ny; ++iy, py *= ey) {
+      std::complex<double> pxy = py;
+      for (int ix = 0; ix < c.nx; ++ix, pxy *= ex) steer(iy * c.nx + ix) = pxy;
+    }
+    cov.noalias() += power_weight[k] * steer * steer.adjoint();
+    weight_sum += power_weight[k];
+  }
+  if (weight_sum <= 0.0) return std::nullopt;
+  cov /= weight_sum;
+  cov.diagonal().array() += 1e-9;  // keeps the factorisation defined when directions repeat
+  return Eigen::MatrixXcd(cov.llt().matrixL());
+}
 
 }  // namespace
 
@@ -344,19 +609,42 @@ bool FmcwRadar::InFieldOfView(const Eigen::Vector3d& u_W) const {
 
 std::vector<Scatterer> FmcwRadar::FindScatterers(double t_s,
                                                  const std::vector<BoundingSphere>& refine) const {
-  const FmcwRadarConfig& c = config_;
-  const Eigen::Vector3d origin = X_WR_.translation();
-
   const std::vector<RayCell>& grid = grid_;
   std::vector<RayHit> grid_hits;
   const std::size_t cast_rays = CastGrid(grid_hits);
 
   // Cells near a moving object, or that see a sphere the caller passed, are
-  // re-cast finer: refine_range_m holds the nearest range that asked for it.
+  // re-cast finer.
+  const std::vector<double> refine_range_m = RefineRanges(grid_hits, refine);
+  std::vector<int> sub_of;  // rays per side of a refined cell
+  const std::vector<RayCell> fine = RefinedRays(refine_range_m, sub_of);
+  std::vector<RayHit> fine_hits;
+  if (!fine.empty()) CastBlocks(fine, /*static_only=*/false, fine_hits);
+  cache_->last_cast_rays = cast_rays + fine.size();
+
+  ScattererMerge merge(config_, scene_, X_WR_.translation(), R_RW_, max_range_m_, range_bin_m_,
+                       velocity_bin_mps_, t_s);
+  std::size_t next_fine = 0;
+  for (std::size_t k = 0; k < grid.size(); ++k) {
+    if (sub_of[k] == 0) {
+      merge.Add(grid[k].dir_w, grid[k].solid_angle_sr, grid_hits[k]);
+      continue;
+    }
+    for (int m = 0; m < sub_of[k] * sub_of[k]; ++m, ++next_fine)
+      merge.Add(fine[next_fine].dir_w, fine[next_fine].solid_angle_sr, fine_hits[next_fine]);
+  }
+  std::vector<Scatterer> out = merge.Scatterers();
+  if (config_.multipath) AddMultipath(out);
+  return out;
+}
+
+std::vector<double> FmcwRadar::RefineRanges(const std::vector<RayHit>& grid_hits,
+                                            const std::vector<BoundingSphere>& refine) const {
+  const FmcwRadarConfig& c = config_;
+  const Eigen::Vector3d origin = X_WR_.translation();
   const double az0 = -0.5 * c.fov_azimuth_deg * kPi / 180.0;
   const double el0 = -0.5 * c.fov_elevation_deg * kPi / 180.0;
-  constexpr double kNotRefined = std::numeric_limits<double>::infinity();
-  std::vector<double> refine_range_m(grid.size(), kNotRefined);
+  std::vector<double> refine_range_m(grid_.size(), kNotRefined);
   auto mark = [&](int j, int i, double range_m) {
     double& r = refine_range_m[static_cast<std::size_t>(j) * n_az_ + i];
     r = std::min(r, range_m);
@@ -389,14 +677,23 @@ std::vector<Scatterer> FmcwRadar::FindScatterers(double t_s,
            i <= index(az + half_az, az0, d_az_rad_, n_az_); ++i)
         mark(j, i, dist - b.radius_m);
   }
+  return refine_range_m;
+}
+
+std::vector<FmcwRadar::RayCell> FmcwRadar::RefinedRays(const std::vector<double>& refine_range_m,
+                                                       std::vector<int>& sub_of) const {
+  const FmcwRadarConfig& c = config_;
+  const double az0 = -0.5 * c.fov_azimuth_deg * kPi / 180.0;
+  const double el0 = -0.5 * c.fov_elevation_deg * kPi / 180.0;
   const double cell_rad = std::max(d_az_rad_, d_el_rad_);
-  std::vector<int> sub_of(grid.size(), 0);  // rays per side of a refined cell
+  sub_of.assign(grid_.size(), 0);
   std::vector<RayCell> fine;
   const Eigen::Matrix3d R_WR = X_WR_.linear();
   for (int j = 0; j < n_el_; ++j)
     for (int i = 0; i < n_az_; ++i) {
       const std::size_t k = static_cast<std::size_t>(j) * n_az_ + i;
       if (refine_range_m[k] == kNotRefined) continue;
+      // n = min(64, ceil(R max(d_az, d_el) / object_ray_spacing_m)) rays per side.
       const int sub = static_cast<int>(
           std::clamp(std::ceil(refine_range_m[k] * cell_rad / c.object_ray_spacing_m), 1.0, 64.0));
       sub_of[k] = sub;
@@ -404,6 +701,7 @@ std::vector<Scatterer> FmcwRadar::FindScatterers(double t_s,
         const double el_lo = el0 + (j + static_cast<double>(q) / sub) * d_el_rad_;
         const double el_hi = el_lo + d_el_rad_ / sub;
         const double el = 0.5 * (el_lo + el_hi);
+        // dOmega = d_az (sin el_hi - sin el_lo), the sub-cell's share.
         const double omega = d_az_rad_ / sub * (std::sin(el_hi) - std::sin(el_lo));
         for (int p = 0; p < sub; ++p) {
           const double az = az0 + (i + (p + 0.5) / sub) * d_az_rad_;
@@ -413,97 +711,7 @@ std::vector<Scatterer> FmcwRadar::FindScatterers(double t_s,
         }
       }
     }
-  std::vector<RayHit> fine_hits;
-  if (!fine.empty()) CastBlocks(fine, /*static_only=*/false, fine_hits);
-  cache_->last_cast_rays = cast_rays + fine.size();
-
-  // Merge cells: object, range, the two direction cosines and velocity (the
-  // static world has no velocity). Cells are hashed, so a fine merge costs
-  // memory by the hits, not by the cells.
-  const double f = c.merge_cell_fraction;
-  const double cell_r = f * range_bin_m_;
-  const double cell_uy = f / (c.nx * c.spacing_x_wavelengths);
-  const double cell_uz = f / (c.ny * c.spacing_y_wavelengths);
-  const double cell_v = f * velocity_bin_mps_;
-  using CellKey = std::array<std::int64_t, 5>;
-  struct CellHash {
-    std::size_t operator()(const CellKey& k) const {
-      std::uint64_t h = 0;
-      for (std::int64_t x : k) h = core::Mix64(h ^ static_cast<std::uint64_t>(x));
-      return static_cast<std::size_t>(h);
-    }
-  };
-  struct Sum {
-    double rcs = 0.0, rcs_range = 0.0;
-    Eigen::Vector3d rcs_u = Eigen::Vector3d::Zero();
-    Eigen::Vector3d rcs_v = Eigen::Vector3d::Zero();
-  };
-  std::unordered_map<CellKey, std::size_t, CellHash> cell_index;
-  std::vector<CellKey> keys;
-  std::vector<Sum> sums;
-  std::array<SurfaceTerms, kRadarClasses> terms;
-  for (std::size_t k = 0; k < kRadarClasses; ++k)
-    terms[k] = SurfaceTerms(SurfaceOf(c.surfaces, static_cast<core::RadarClass>(k)));
-
-  auto add_hit = [&](const RayCell& cell, const RayHit& hit) {
-    if (!hit.hit() || hit.t <= 0.0f) return;
-    const Eigen::Vector3d u = cell.dir_w.cast<double>().normalized();
-    const double range_m = hit.t * static_cast<double>(cell.dir_w.norm());
-    if (range_m >= max_range_m_) return;
-    const double cos_i = std::abs(static_cast<double>(hit.normal_w.dot(cell.dir_w.normalized())));
-    const SurfaceTerms& surface =
-        terms[static_cast<std::size_t>(scene_.material(hit.material).radar_class)];
-    const double area_m2 = range_m * range_m * cell.solid_angle_sr;
-    // sigma = A sigma0 / cos: the limit at grazing incidence is A gamma.
-    const double rcs =
-        cos_i > 1e-6 ? area_m2 * surface.Sigma0(cos_i) / cos_i : area_m2 * surface.gamma;
-    if (!(rcs > 0.0)) return;
-    Eigen::Vector3d v = Eigen::Vector3d::Zero();
-    if (hit.object > 0) v = scene_.PointVelocity(hit.object, origin + range_m * u, t_s);
-    const Eigen::Vector3d u_R = R_RW_ * u;
-    const CellKey key = {hit.object, static_cast<std::int64_t>(range_m / cell_r),
-                         static_cast<std::int64_t>(std::floor(u_R.y() / cell_uy)),
-                         static_cast<std::int64_t>(std::floor(u_R.z() / cell_uz)),
-                         static_cast<std::int64_t>(std::floor(v.dot(u) / cell_v))};
-    const auto [it, added] = cell_index.emplace(key, sums.size());
-    if (added) {
-      keys.push_back(key);
-      sums.emplace_back();
-    }
-    Sum& sum = sums[it->second];
-    sum.rcs += rcs;
-    sum.rcs_range += rcs * range_m;
-    sum.rcs_u += rcs * u;
-    sum.rcs_v += rcs * v;
-  };
-  std::size_t next_fine = 0;
-  for (std::size_t k = 0; k < grid.size(); ++k) {
-    if (sub_of[k] == 0) {
-      add_hit(grid[k], grid_hits[k]);
-      continue;
-    }
-    for (int m = 0; m < sub_of[k] * sub_of[k]; ++m, ++next_fine)
-      add_hit(fine[next_fine], fine_hits[next_fine]);
-  }
-
-  // Cell order: the static world (object 0) first, then each moving object.
-  std::vector<std::size_t> cells(sums.size());
-  std::iota(cells.begin(), cells.end(), 0);
-  std::sort(cells.begin(), cells.end(),
-            [&](std::size_t a, std::size_t b) { return keys[a] < keys[b]; });
-  std::vector<Scatterer> out;
-  out.reserve(cells.size());
-  for (std::size_t k : cells) {
-    const Sum& s = sums[k];
-    Scatterer x;
-    x.position_m = origin + s.rcs_range / s.rcs * s.rcs_u.normalized();
-    x.velocity_mps = s.rcs_v / s.rcs;
-    x.rcs_m2 = s.rcs;
-    x.object = static_cast<std::int32_t>(keys[k][0]);
-    out.push_back(x);
-  }
-  if (c.multipath) AddMultipath(out);
-  return out;
+  return fine;
 }
 
 void FmcwRadar::AddMultipath(std::vector<Scatterer>& scatterers) const {
@@ -553,119 +761,21 @@ void FmcwRadar::AddRainClutter(double rain_mm_h, std::uint64_t frame_key, RadarC
   const double eta = RainReflectivityPerM(rain_mm_h);
   if (eta <= 0.0) return;
   const int ns = c.adc_samples, nc = c.chirps_per_frame, antennas = c.nx * c.ny;
-  const Eigen::Vector3d o = X_WR_.translation();
-  const Eigen::Matrix3d R_WR = X_WR_.linear();
 
   // Where the rain is visible: the free range of a 1-degree ray grid.
-  const int n_az = std::max(1, static_cast<int>(std::ceil(c.fov_azimuth_deg / kRainRayStepDeg)));
-  const int n_el = std::max(1, static_cast<int>(std::ceil(c.fov_elevation_deg / kRainRayStepDeg)));
-  const double d_az = c.fov_azimuth_deg * kPi / 180.0 / n_az;
-  const double d_el = c.fov_elevation_deg * kPi / 180.0 / n_el;
-  const std::size_t n_rays = static_cast<std::size_t>(n_az) * n_el;
-  std::vector<Ray> rays(n_rays);
-  std::vector<double> omega(n_rays);
-  std::vector<Eigen::Vector3d> dirs_R(n_rays);
-  for (int j = 0; j < n_el; ++j) {
-    const double el_lo = -0.5 * c.fov_elevation_deg * kPi / 180.0 + j * d_el;
-    const double el = el_lo + 0.5 * d_el;
-    for (int i = 0; i < n_az; ++i) {
-      const double az = -0.5 * c.fov_azimuth_deg * kPi / 180.0 + (i + 0.5) * d_az;
-      const std::size_t k = static_cast<std::size_t>(j) * n_az + i;
-      dirs_R[k] = {std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el)};
-      omega[k] = d_az * (std::sin(el_lo + d_el) - std::sin(el_lo));
-      rays[k] = {o.cast<float>(), (R_WR * dirs_R[k]).cast<float>(), 1e-3f,
-                 static_cast<float>(max_range_m_)};
-    }
-  }
-  std::vector<RayHit> hits(n_rays);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n_rays, kBlockRays),
-                    [&](const tbb::blocked_range<std::size_t>& r) {
-                      scene_.IntersectMany(&rays[r.begin()], &hits[r.begin()], r.size());
-                    });
-
+  const RainView view = CastRainView(c, scene_, X_WR_, max_range_m_);
   // Range bin b is centred on the FFT's bin b, [(b - 1/2), (b + 1/2)) dR;
   // beyond the last centre the beat would wrap to bin 0.
   const int first_bin =
       static_cast<int>(std::ceil(c.rain_clutter_min_range_m / range_bin_m_ - 0.5));
   if (first_bin >= ns) return;
-  // Fall speeds: 16 equal-weight quantiles of the reflectivity-weighted drop
-  // diameter, D^6 exp(-Lambda D), i.e. D ~ Gamma(7, 1 / Lambda).
-  constexpr int kDropNodes = 16;
-  const double lambda_per_mm = 4.1 * std::pow(rain_mm_h, -0.21);  // Marshall-Palmer
-  std::array<double, kDropNodes> fall_mps{};
-  for (int q = 0; q < kDropNodes; ++q) {
-    const double p = (q + 0.5) / kDropNodes;
-    auto gamma7_cdf = [](double x) {
-      double term = 1.0, sum = 1.0;
-      for (int k = 1; k < 7; ++k) sum += (term *= x / k);
-      return 1.0 - std::exp(-x) * sum;
-    };
-    double lo = 0.0, hi = 60.0;
-    for (int it = 0; it < 60; ++it) (gamma7_cdf(0.5 * (lo + hi)) < p ? lo : hi) = 0.5 * (lo + hi);
-    const double d_mm = 0.5 * (lo + hi) / lambda_per_mm;
-    fall_mps[q] = std::max(0.0, 9.65 - 10.3 * std::exp(-0.6 * d_mm));  // Atlas et al. 1973
-  }
-  // Solid angle of rain per (last visible bin, Doppler bin); a suffix sum
-  // over bins then gives the solid angle visible at each bin, per Doppler.
-  std::vector<double> spectrum(static_cast<std::size_t>(ns) * nc, 0.0);
-  std::vector<double> power_weight(n_rays, 0.0);  // of each direction, for the covariance
-  const double r_first = std::max(c.rain_clutter_min_range_m, (first_bin - 0.5) * range_bin_m_);
-  for (std::size_t k = 0; k < n_rays; ++k) {
-    const double free_m = hits[k].hit() ? hits[k].t : max_range_m_;
-    const int last = std::min(ns - 1, static_cast<int>(std::ceil(free_m / range_bin_m_)) - 1);
-    if (last < first_bin) continue;
-    power_weight[k] = omega[k] * (1.0 / r_first - 1.0 / ((last + 0.5) * range_bin_m_));
-    const double up = rays[k].direction.cast<double>().z();
-    for (int q = 0; q < kDropNodes; ++q) {
-      // Radial velocity of a drop falling along -z, in Doppler bins.
-      const double x = -fall_mps[q] * up / velocity_bin_mps_;
-      const double lo = std::floor(x), frac = x - lo;
-      const int d0 = ((static_cast<int>(lo) % nc) + nc) % nc, d1 = (d0 + 1) % nc;
-      const double w = omega[k] / kDropNodes;
-      spectrum[static_cast<std::size_t>(last) * nc + d0] += w * (1.0 - frac);
-      spectrum[static_cast<std::size_t>(last) * nc + d1] += w * frac;
-    }
-  }
-  for (int b = ns - 2; b >= first_bin; --b)
-    for (int d = 0; d < nc; ++d)
-      spectrum[static_cast<std::size_t>(b) * nc + d] +=
-          spectrum[static_cast<std::size_t>(b + 1) * nc + d];
-  // Cell variance: eta (visible solid angle) integral of R^2 dR over the bin
-  // at SNR per m^2 snr_scale L(R) / R^4.
-  std::vector<float> sigma(static_cast<std::size_t>(ns) * nc, 0.0f);  // std of Re and Im
-  for (int b = first_bin; b < ns; ++b) {
-    const double r_lo = std::max(c.rain_clutter_min_range_m, (b - 0.5) * range_bin_m_);
-    const double r_hi = (b + 0.5) * range_bin_m_;
-    if (r_hi <= r_lo) continue;
-    const double per_sr = eta * SnrPerSample(1.0, 0.5 * (r_lo + r_hi), rain_mm_h) *
-                          std::pow(0.5 * (r_lo + r_hi), 4) * (1.0 / r_lo - 1.0 / r_hi);
-    for (int d = 0; d < nc; ++d)
-      sigma[static_cast<std::size_t>(d) * ns + b] = static_cast<float>(
-          std::sqrt(0.5 * per_sr * spectrum[static_cast<std::size_t>(b) * nc + d]));
-  }
-
-  // Spatial covariance of the elements under rain from the visible
-  // directions, R_ab = sum w e^{j 2 pi (p_a - p_b) . u / lambda} / sum w,
-  // imposed on independent fields by its Cholesky factor.
-  Eigen::MatrixXcd cov = Eigen::MatrixXcd::Zero(antennas, antennas);
-  double weight_sum = 0.0;
-  Eigen::VectorXcd steer(antennas);
-  for (std::size_t k = 0; k < n_rays; ++k) {
-    if (power_weight[k] <= 0.0) continue;
-    const std::complex<double> ex = Phasor(2.0 * kPi * c.spacing_x_wavelengths * dirs_R[k].y());
-    const std::complex<double> ey = Phasor(2.0 * kPi * c.spacing_y_wavelengths * dirs_R[k].z());
-    std::complex<double> py = 1.0;
-    for (int iy = 0; iy < c.ny; ++iy, py *= ey) {
-      std::complex<double> pxy = py;
-      for (int ix = 0; ix < c.nx; ++ix, pxy *= ex) steer(iy * c.nx + ix) = pxy;
-    }
-    cov.noalias() += power_weight[k] * steer * steer.adjoint();
-    weight_sum += power_weight[k];
-  }
-  if (weight_sum <= 0.0) return;
-  cov /= weight_sum;
-  cov.diagonal().array() += 1e-9;  // keeps the factorisation defined when directions repeat
-  const Eigen::MatrixXcd mix = cov.llt().matrixL();
+  const std::array<double, kDropNodes> fall_mps = RainFallSpeeds(rain_mm_h);
+  std::vector<double> power_weight;  // of each direction, for the covariance
+  const std::vector<double> spectrum = RainSpectrum(*this, view, fall_mps, first_bin, power_weight);
+  const std::vector<float> sigma = RainCellSigma(*this, rain_mm_h, eta, first_bin, spectrum);
+  const std::optional<Eigen::MatrixXcd> mixing = RainSpatialMix(c, view, power_weight);
+  if (!mixing) return;
+  const Eigen::MatrixXcd& mix = *mixing;
 
   // Each independent field: complex Gaussian cells (range bin b, Doppler bin
   // d) taken to samples and chirps by the 2-D inverse DFT
@@ -684,6 +794,7 @@ void FmcwRadar::AddRainClutter(double rain_mm_h, std::uint64_t frame_key, RadarC
     }
     rain_fft_->Inverse(g);
   });
+  // The elements' fields mixed by the covariance's Cholesky factor, added to the cube.
   tbb::parallel_for(0, nc, [&](int ch) {
     for (int a = 0; a < antennas; ++a) {
       std::complex<float>* out = cube.data.data() + (static_cast<std::size_t>(a) * nc + ch) * ns;
@@ -700,12 +811,22 @@ void FmcwRadar::AddRainClutter(double rain_mm_h, std::uint64_t frame_key, RadarC
   });
 }
 
-RadarCube FmcwRadar::Synthesize(const std::vector<Scatterer>& scatterers,
-                                const core::WeatherConfig& weather, core::RngStream& noise) const {
-  const FmcwRadarConfig& c = config_;
-  const std::uint64_t frame_key = noise.NextU64();
-  const Eigen::Vector3d o = X_WR_.translation();
+// Per echo (in group order), the separable factors of its samples:
+// A[q] = a e^{j(4 pi R / lambda + w kFastBlock q)}, B[r] = e^{j w r}
+// (w = 2 pi f_b / fs, sample s = kFastBlock q + r) and the element phasors
+// e^{j 2 pi (ix dx u_y + iy dy u_z) / lambda}; per velocity group, its
+// Doppler phasor at each chirp.
+struct FmcwRadar::SampleFactors {
+  int blocks = 0;                 // fast-time blocks of kFastBlock samples
+  std::vector<float> a_re, a_im;  // [echo * blocks + q]
+  std::vector<float> b_re, b_im;  // [echo * kFastBlock + r]
+  std::vector<float> e_re, e_im;  // [echo * antennas + element]
+  std::vector<float> z_re, z_im;  // [group * chirps + chirp]
+};
 
+std::vector<FmcwRadar::Echo> FmcwRadar::EchoesOf(const std::vector<Scatterer>& scatterers,
+                                                 double rain_mm_h) const {
+  const Eigen::Vector3d o = X_WR_.translation();
   std::vector<Echo> echoes;
   echoes.reserve(scatterers.size());
   for (const Scatterer& s : scatterers) {
@@ -714,13 +835,14 @@ RadarCube FmcwRadar::Synthesize(const std::vector<Scatterer>& scatterers,
     if (!(r >= kMinRangeM && r < max_range_m_) || !(s.rcs_m2 > 0.0)) continue;
     const Eigen::Vector3d u_W = d / r;
     echoes.push_back(
-        {r, s.velocity_mps.dot(u_W), R_RW_ * u_W, SnrPerSample(s.rcs_m2, r, weather.rain_mm_h)});
+        {r, s.velocity_mps.dot(u_W), R_RW_ * u_W, SnrPerSample(s.rcs_m2, r, rain_mm_h)});
   }
+  return echoes;
+}
 
-  // Echoes of equal radial velocity share one Doppler progression, so each
-  // antenna sums their fast-time signals once and spreads the sum over the
-  // chirps: the static world costs one fast-time row per antenna.
-  std::vector<std::size_t> order(echoes.size());
+std::vector<std::size_t> FmcwRadar::VelocityGroups(const std::vector<Echo>& echoes,
+                                                   std::vector<std::size_t>& order) {
+  order.resize(echoes.size());
   std::iota(order.begin(), order.end(), 0);
   std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
     return echoes[a].radial_velocity_mps < echoes[b].radial_velocity_mps;
@@ -729,30 +851,36 @@ RadarCube FmcwRadar::Synthesize(const std::vector<Scatterer>& scatterers,
   for (std::size_t i = 0; i < order.size(); ++i)
     if (i == 0 || echoes[order[i]].radial_velocity_mps != echoes[order[i - 1]].radial_velocity_mps)
       group_begin.push_back(i);
-  const std::size_t groups = group_begin.size();
   group_begin.push_back(order.size());
+  return group_begin;
+}
 
-  const int ns = c.adc_samples, nc = c.chirps_per_frame, nx = c.nx, ny = c.ny;
+void FmcwRadar::FillEchoFactors(const std::vector<Echo>& echoes,
+                                const std::vector<std::size_t>& order, SampleFactors& f) const {
+  const FmcwRadarConfig& c = config_;
+  const int nx = c.nx, ny = c.ny;
   const int antennas = nx * ny;
-  const int blocks = (ns + kFastBlock - 1) / kFastBlock;
+  const int blocks = f.blocks = (c.adc_samples + kFastBlock - 1) / kFastBlock;
   const std::size_t k_count = echoes.size();
   const double dx_m = c.spacing_x_wavelengths * lambda_m_;
   const double dy_m = c.spacing_y_wavelengths * lambda_m_;
-
-  // Per echo (in group order), the separable factors of its samples:
-  // A[q] = a e^{j(4 pi R / lambda + w kFastBlock q)}, B[r] = e^{j w r}
-  // (w = 2 pi f_b / fs, sample s = kFastBlock q + r) and the element
-  // phasors e^{j 2 pi (ix dx u_y + iy dy u_z) / lambda}. Powers of one
-  // phasor are taken by repeated multiplication in double: a few sincos per
-  // echo, and 1e-14 rad of accumulated error.
-  std::vector<float> a_re(k_count * blocks), a_im(k_count * blocks);
-  std::vector<float> b_re(k_count * kFastBlock), b_im(k_count * kFastBlock);
-  std::vector<float> e_re(k_count * antennas), e_im(k_count * antennas);
+  // Powers of one phasor are taken by repeated multiplication in double: a
+  // few sincos per echo, and 1e-14 rad of accumulated error.
+  std::vector<float>& a_re = f.a_re;
+  std::vector<float>& a_im = f.a_im;
+  std::vector<float>& b_re = f.b_re;
+  std::vector<float>& b_im = f.b_im;
+  std::vector<float>& e_re = f.e_re;
+  std::vector<float>& e_im = f.e_im;
+  a_re.resize(k_count * blocks), a_im.resize(k_count * blocks);
+  b_re.resize(k_count * kFastBlock), b_im.resize(k_count * kFastBlock);
+  e_re.resize(k_count * antennas), e_im.resize(k_count * antennas);
   tbb::parallel_for(
       tbb::blocked_range<std::size_t>(0, k_count, 64),
       [&](const tbb::blocked_range<std::size_t>& range) {
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
           const Echo& e = echoes[order[i]];
+          // f_b = 2 K R / c
           const double f_b = 2.0 * slope_hz_per_s_ * e.range_m / kSpeedOfLight_mps;
           const double w = 2.0 * kPi * f_b / sample_rate_hz_;
           const std::complex<double> step = Phasor(w);
@@ -779,8 +907,18 @@ RadarCube FmcwRadar::Synthesize(const std::vector<Scatterer>& scatterers,
           }
         }
       });
-  // Doppler phasor of each group at each chirp.
-  std::vector<float> z_re(groups * nc), z_im(groups * nc);
+}
+
+void FmcwRadar::FillDopplerPhasors(const std::vector<Echo>& echoes,
+                                   const std::vector<std::size_t>& order,
+                                   const std::vector<std::size_t>& group_begin,
+                                   SampleFactors& f) const {
+  const int nc = config_.chirps_per_frame;
+  const std::size_t groups = group_begin.size() - 1;
+  std::vector<float>& z_re = f.z_re;
+  std::vector<float>& z_im = f.z_im;
+  // Doppler phasor of each group at each chirp: e^{j 2 pi (2 v / lambda) c T_c}.
+  z_re.resize(groups * nc), z_im.resize(groups * nc);
   for (std::size_t g = 0; g < groups; ++g) {
     const double v = echoes[order[group_begin[g]]].radial_velocity_mps;
     for (int ch = 0; ch < nc; ++ch) {
@@ -790,9 +928,23 @@ RadarCube FmcwRadar::Synthesize(const std::vector<Scatterer>& scatterers,
       z_im[g * nc + ch] = static_cast<float>(z.imag());
     }
   }
+}
 
-  RadarCube cube;
-  cube.Resize(ns, nc, nx, ny);
+void FmcwRadar::SumSignals(const SampleFactors& f, const std::vector<std::size_t>& group_begin,
+                           std::uint64_t frame_key, RadarCube& cube) const {
+  const FmcwRadarConfig& c = config_;
+  const int ns = c.adc_samples, nc = c.chirps_per_frame;
+  const int antennas = c.nx * c.ny;
+  const int blocks = f.blocks;
+  const std::size_t groups = group_begin.size() - 1;
+  const std::vector<float>& a_re = f.a_re;
+  const std::vector<float>& a_im = f.a_im;
+  const std::vector<float>& b_re = f.b_re;
+  const std::vector<float>& b_im = f.b_im;
+  const std::vector<float>& e_re = f.e_re;
+  const std::vector<float>& e_im = f.e_im;
+  const std::vector<float>& z_re = f.z_re;
+  const std::vector<float>& z_im = f.z_im;
   const std::size_t padded = static_cast<std::size_t>(blocks) * kFastBlock;
   tbb::parallel_for(0, antennas, [&](int ant) {
     // Fast-time sum of each group at this antenna.
@@ -832,6 +984,26 @@ RadarCube FmcwRadar::Synthesize(const std::vector<Scatterer>& scatterers,
       }
     }
   });
+}
+
+RadarCube FmcwRadar::Synthesize(const std::vector<Scatterer>& scatterers,
+                                const core::WeatherConfig& weather, core::RngStream& noise) const {
+  const FmcwRadarConfig& c = config_;
+  const std::uint64_t frame_key = noise.NextU64();
+  const std::vector<Echo> echoes = EchoesOf(scatterers, weather.rain_mm_h);
+
+  // Echoes of equal radial velocity share one Doppler progression, so each
+  // antenna sums their fast-time signals once and spreads the sum over the
+  // chirps: the static world costs one fast-time row per antenna.
+  std::vector<std::size_t> order;
+  const std::vector<std::size_t> group_begin = VelocityGroups(echoes, order);
+  SampleFactors factors;
+  FillEchoFactors(echoes, order, factors);
+  FillDopplerPhasors(echoes, order, group_begin, factors);
+
+  RadarCube cube;
+  cube.Resize(c.adc_samples, c.chirps_per_frame, c.nx, c.ny);
+  SumSignals(factors, group_begin, frame_key, cube);
   if (weather.rain_mm_h > 0.0 && c.rain_clutter) AddRainClutter(weather.rain_mm_h, frame_key, cube);
   return cube;
 }

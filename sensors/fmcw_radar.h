@@ -157,14 +157,14 @@
 #include <memory>
 #include <vector>
 
-#include "sensors/fmcw_radar_config.h"
-#include "sensors/frames.h"
-#include "sensors/radar_cube.h"
-#include "sensors/raycast_scene.h"
 #include "core/rain_attenuation.h"
 #include "core/rng.h"
 #include "core/weather.h"
 #include "core/world_geometry.h"
+#include "sensors/fmcw_radar_config.h"
+#include "sensors/frames.h"
+#include "sensors/radar_cube.h"
+#include "sensors/raycast_scene.h"
 
 namespace uavsim::sensors {
 
@@ -267,6 +267,28 @@ class FmcwRadar {
   // The coarse grid's hits, from the cache where that is exact; returns the
   // rays cast.
   std::size_t CastGrid(std::vector<RayHit>& hits) const;
+  // FindScatterers' steps: the nearest range at which each grid cell asked
+  // to be refined (infinity: not refined), and the refined cells' rays, n x n
+  // per cell in grid order, with n per cell in sub_of (0: not refined).
+  std::vector<double> RefineRanges(const std::vector<RayHit>& grid_hits,
+                                   const std::vector<BoundingSphere>& refine) const;
+  std::vector<RayCell> RefinedRays(const std::vector<double>& refine_range_m,
+                                   std::vector<int>& sub_of) const;
+  // Synthesize's steps: the echoes in range; their order by radial velocity
+  // and where each group of equal velocity begins in it (with the end last);
+  // the separable factors of their samples (per echo: fast time and
+  // elements; per group: chirps); the antennas' signals and thermal noise
+  // into the cube.
+  struct SampleFactors;
+  std::vector<Echo> EchoesOf(const std::vector<Scatterer>& scatterers, double rain_mm_h) const;
+  static std::vector<std::size_t> VelocityGroups(const std::vector<Echo>& echoes,
+                                                 std::vector<std::size_t>& order);
+  void FillEchoFactors(const std::vector<Echo>& echoes, const std::vector<std::size_t>& order,
+                       SampleFactors& f) const;
+  void FillDopplerPhasors(const std::vector<Echo>& echoes, const std::vector<std::size_t>& order,
+                          const std::vector<std::size_t>& group_begin, SampleFactors& f) const;
+  void SumSignals(const SampleFactors& f, const std::vector<std::size_t>& group_begin,
+                  std::uint64_t frame_key, RadarCube& cube) const;
   struct RainFft;  // the FFTW plan of the rain field (FFTW stays private to sensors/)
   void AddRainClutter(double rain_mm_h, std::uint64_t frame_key, RadarCube& cube) const;
 

@@ -134,6 +134,193 @@ void Require(bool ok, const std::string& message) {
   if (!ok) throw std::invalid_argument("LidarConfig: " + message);
 }
 
+// The fog's mean echo S(r) = rho_v xi(r) exp(-2 alpha r) / r^2 (Hahner et al.
+// 2021), tabulated from r_lo to where no fade could still lift it to P_th.
+void FillFogEcho(Atmosphere& atm, const LidarConfig& c, double visibility_m, const Overlap& overlap,
+                 double p_th, double r_lim, double r_lo) {
+  const double alpha = atm.alpha_per_m;
+  atm.fog = true;
+  const double beta = kFogBackscatterTimesVisibility / visibility_m;
+  // rho_v = pi beta c tau / 2: one range cell of fog as a Lambertian target.
+  const double rho_v = kPi * beta * kSpeedOfLight_mps * c.pulse_width_ns * 1e-9 / 2.0;
+  // Past full overlap S(r) <= rho_v / r^2, so beyond this no fade is detected.
+  const double r_end =
+      std::min(r_lim, std::max(c.full_overlap_range_m, std::sqrt(kMaxFade * rho_v / p_th)));
+  atm.fog_echo.Fill(
+      r_lo, std::max(r_end, r_lo + 0.01), std::max(0.01, (r_end - r_lo) / 8192.0),
+      [&](double r) { return rho_v * overlap(r) * std::exp(-2.0 * alpha * r) / (r * r); });
+  const auto& v = atm.fog_echo.value;
+  atm.fog_peak = static_cast<std::size_t>(std::max_element(v.begin(), v.end()) - v.begin());
+}
+
+// The rain's detectable drops per metre of beam, lambda(r): the
+// Marshall-Palmer tail above the smallest drop still detectable at r, in the
+// beam's cone (LISA, Kilic et al. 2021), out to where that drop passes the
+// largest drop that exists.
+void FillRainDrops(Atmosphere& atm, const LidarConfig& c, double rain_mm_h, const Overlap& overlap,
+                   double p_th, double r_lim, double r_lo) {
+  const double alpha = atm.alpha_per_m;
+  atm.rain = true;
+  const double lambda = MarshallPalmerLambdaPerMm(rain_mm_h);
+  atm.rain_lambda_per_mm = lambda;
+  const double theta = c.beam_divergence_mrad * 1e-3;
+  // The smallest detectable drop grows as r^2, so drops are detectable only
+  // up to where it passes the largest drop that exists.
+  double r_end = r_lo;
+  while (r_end < r_lim) {
+    r_end += 0.05;
+    const double xi = overlap(r_end);
+    if (r_end < c.full_overlap_range_m || xi <= 0.0) continue;
+    const double d_min_mm = 1e3 * theta * r_end * r_end *
+                            std::sqrt(p_th * std::exp(2.0 * alpha * r_end) / kWaterFresnel);
+    if (d_min_mm > kMaxDropMm) break;
+  }
+  r_end = std::min(r_end, r_lim);
+  atm.rain_drops.Fill(r_lo, std::max(r_end, r_lo + 0.01), 0.02, [&](double r) {
+    const double xi = overlap(r);
+    if (xi <= 0.0) return 0.0;
+    // A drop filling the beam returns rho_w xi e^{-2 alpha r} / r^2; smaller
+    // drops return their share (D / theta r)^2 of it.
+    const double fill = std::sqrt(p_th * r * r * std::exp(2.0 * alpha * r) / (kWaterFresnel * xi));
+    if (fill >= 1.0) return 0.0;
+    const double d_min_mm = std::max(kMinDropMm, 1e3 * theta * r * fill);
+    const double cone_area_m2 = kPi * theta * theta * r * r / 4.0;
+    // N0 / Lambda e^{-Lambda D_min}: Marshall-Palmer drops larger than D_min per m^3.
+    return cone_area_m2 * kMarshallPalmerN0 / lambda * std::exp(-lambda * d_min_mm);
+  });
+}
+
+// The weather's effect on one frame: extinction and the backscatter tables.
+Atmosphere MakeAtmosphere(const LidarConfig& c, const core::WeatherConfig& weather,
+                          const Overlap& overlap, double p_th, double r_lim, double r_lo) {
+  Atmosphere atm;
+  atm.alpha_per_m = AtmosphericExtinctionPerM(weather);
+  if (weather.fog_visibility_m)
+    FillFogEcho(atm, c, *weather.fog_visibility_m, overlap, p_th, r_lim, r_lo);
+  if (weather.rain_mm_h > 0.0) FillRainDrops(atm, c, weather.rain_mm_h, overlap, p_th, r_lim, r_lo);
+  return atm;
+}
+
+// The frame's constants each beam reads to turn its hit into a point.
+struct BeamShading {
+  const LidarConfig& c;
+  const RaycastScene& scene;
+  const Atmosphere& atm;
+  Overlap overlap;
+  double p_th, r_lim, speckle_cells;
+  std::uint64_t frame_key;
+  bool needs_rng;
+  float sat2;  // saturation_range_m^2
+  Eigen::Vector3f origin_w;
+
+  // Keeps e if it beats `best` under the return mode.
+  void Offer(const Echo& e, std::optional<Echo>& best) const {
+    if (!best || (c.return_mode == LidarReturnMode::kStrongest ? e.power > best->power
+                                                               : e.range_m > best->range_m))
+      best = e;
+  }
+
+  // The fog echo of a beam whose hard target (if any) is at hit_m: a speckle
+  // fade E, then a range drawn from S over the part above P_th / E.
+  void FogEcho(double hit_m, core::RngStream& rng, std::optional<Echo>& best) const {
+    const RangeTable& f = atm.fog_echo;
+    const double fade = FogSpeckleFade(speckle_cells, rng);
+    const double level = p_th / fade;
+    if (f.value[atm.fog_peak] >= level) {
+      // S rises to its peak and falls after it: the part above `level` is
+      // one interval around the peak.
+      const auto rise_end = f.value.begin() + static_cast<std::ptrdiff_t>(atm.fog_peak) + 1;
+      const auto first = std::lower_bound(f.value.begin(), rise_end, level);
+      const auto last = std::lower_bound(rise_end - 1, f.value.end(), level,
+                                         [](double s, double lv) { return s >= lv; });
+      const double r_a = f.r0_m + f.step_m * static_cast<double>(first - f.value.begin());
+      const double r_b =
+          std::min(hit_m, f.r0_m + f.step_m * static_cast<double>(last - f.value.begin() - 1));
+      const double u = rng.Uniform();
+      if (r_b > r_a) {
+        const double ca = f.Cumulative(r_a), cb = f.Cumulative(r_b);
+        const double r = f.InverseCumulative(ca + u * (cb - ca));
+        Offer({r, std::max(p_th, fade * f.Value(r)), true}, best);
+      }
+    }
+  }
+
+  // The rain echoes of a beam whose hard target (if any) is at hit_m: a
+  // Poisson number of detectable drops in front of it, each at a range drawn
+  // from lambda(r) and of a diameter drawn from the Marshall-Palmer tail.
+  void RainEchoes(double hit_m, core::RngStream& rng, std::optional<Echo>& best) const {
+    const double alpha = atm.alpha_per_m;
+    const RangeTable& d = atm.rain_drops;
+    const double r_end = std::min(hit_m, d.end_m());
+    const double mean = r_end > d.r0_m ? d.Cumulative(r_end) : 0.0;
+    const std::uint64_t drops = PoissonDraw(mean, rng);
+    const double theta = c.beam_divergence_mrad * 1e-3;
+    for (std::uint64_t k = 0; k < drops; ++k) {
+      const double r = d.InverseCumulative(rng.Uniform() * mean);
+      const double xi = overlap(r);
+      const double e2 = std::exp(-2.0 * alpha * r);
+      const double fill = std::sqrt(p_th * r * r / (e2 * kWaterFresnel * std::max(xi, 1e-12)));
+      const double d_min_mm = std::max(kMinDropMm, 1e3 * theta * r * fill);
+      // The Marshall-Palmer tail above d_min is exponential again.
+      const double d_mm = d_min_mm + rng.Exponential(1.0 / atm.rain_lambda_per_mm);
+      const double ratio = d_mm * 1e-3 / (theta * r);
+      const double share = std::min(1.0, ratio * ratio);
+      // LISA: P = rho_w min((D / (theta r))^2, 1) xi(r) exp(-2 alpha r) / r^2.
+      Offer({r, std::max(p_th, kWaterFresnel * share * xi * e2 / (r * r)), true}, best);
+    }
+  }
+
+  // Beam i (ray, hit, firing time): its point into `slot` and kind 0 (no
+  // return), 1 (target) or 2 (spurious) into `kind`.
+  void Beam(std::size_t i, const Ray& ray, const RayHit& h, float time, LidarPoint& slot,
+            std::uint8_t& kind) const {
+    const double alpha = atm.alpha_per_m;
+    std::optional<Echo> best;
+    double hit_m = r_lim;
+    if (h.hit()) {
+      hit_m = h.t;
+      const double rho = std::clamp(scene.material(h.material).lidar_reflectivity, 0.0, 1.0);
+      const double cos_i = std::abs(static_cast<double>(h.normal_w.dot(ray.direction)));
+      // P(R) = rho cos(i) xi(R) exp(-2 alpha R) / R^2 (lidar.h).
+      const double power =
+          rho * cos_i * overlap(hit_m) * std::exp(-2.0 * alpha * hit_m) / (hit_m * hit_m);
+      if (power >= p_th) best = Echo{hit_m, power, false};
+    }
+    if (!best && !atm.active()) return;
+    std::optional<core::RngStream> rng;
+    if (needs_rng) rng.emplace(core::Mix64(frame_key ^ core::Mix64(i)));
+    if (atm.active()) {
+      if (atm.fog) FogEcho(hit_m, *rng, best);
+      if (atm.rain) RainEchoes(hit_m, *rng, best);
+    }
+    if (!best) return;
+    if (c.dropout > 0.0 && rng->Bernoulli(c.dropout)) return;
+    double range_m = best->range_m;
+    if (c.range_noise_m > 0.0) range_m += c.range_noise_m * rng->Normal();
+    const Eigen::Vector3f p = origin_w + ray.direction * static_cast<float>(range_m);
+    slot = {p.x(), p.y(), p.z(), std::min(1.0f, static_cast<float>(best->power) * sat2), time};
+    kind = best->spurious ? 2 : 1;
+  }
+};
+
+// The frame of the beams' points (kinds: 0 no return, 1 target, 2 spurious),
+// in beam order.
+PointCloudFrame CollectPoints(double t_start_s, const std::vector<LidarPoint>& slots,
+                              const std::vector<std::uint8_t>& kinds) {
+  PointCloudFrame frame;
+  frame.t_start_s = t_start_s;
+  frame.rays_cast = slots.size();
+  std::size_t count = 0;
+  for (std::uint8_t k : kinds) count += k != 0;
+  frame.points.reserve(count);
+  for (std::size_t i = 0; i < slots.size(); ++i) {
+    if (kinds[i] == 0) continue;
+    frame.points.push_back(slots[i]);
+    frame.spurious += kinds[i] == 2;
+  }
+  return frame;
+}
+
 }  // namespace
 
 Lidar::Lidar(const LidarConfig& config, RaycastScene& scene) : config_(config), scene_(scene) {
@@ -306,113 +493,16 @@ PointCloudFrame Lidar::Capture(double t_start_s, const core::WeatherConfig& weat
   const LidarConfig& c = config_;
   const std::uint64_t frame_key = noise.NextU64();
   const Overlap overlap{c.min_range_m, c.full_overlap_range_m};
-  const double p_th = threshold_;
-  const double r_lim = ray_length_m_;
   const double r_lo = std::max(c.min_range_m, 0.01);
-  const double speckle_cells = FogSpeckleCells(c);
-
-  Atmosphere atm;
-  atm.alpha_per_m = AtmosphericExtinctionPerM(weather);
-  const double alpha = atm.alpha_per_m;
-  if (weather.fog_visibility_m) {
-    atm.fog = true;
-    const double beta = kFogBackscatterTimesVisibility / *weather.fog_visibility_m;
-    const double rho_v = kPi * beta * kSpeedOfLight_mps * c.pulse_width_ns * 1e-9 / 2.0;
-    // Past full overlap S(r) <= rho_v / r^2, so beyond this no fade is detected.
-    const double r_end =
-        std::min(r_lim, std::max(c.full_overlap_range_m, std::sqrt(kMaxFade * rho_v / p_th)));
-    atm.fog_echo.Fill(
-        r_lo, std::max(r_end, r_lo + 0.01), std::max(0.01, (r_end - r_lo) / 8192.0),
-        [&](double r) { return rho_v * overlap(r) * std::exp(-2.0 * alpha * r) / (r * r); });
-    const auto& v = atm.fog_echo.value;
-    atm.fog_peak = static_cast<std::size_t>(std::max_element(v.begin(), v.end()) - v.begin());
-  }
-  if (weather.rain_mm_h > 0.0) {
-    atm.rain = true;
-    const double lambda = MarshallPalmerLambdaPerMm(weather.rain_mm_h);
-    atm.rain_lambda_per_mm = lambda;
-    const double theta = c.beam_divergence_mrad * 1e-3;
-    // The smallest detectable drop grows as r^2, so drops are detectable only
-    // up to where it passes the largest drop that exists.
-    double r_end = r_lo;
-    while (r_end < r_lim) {
-      r_end += 0.05;
-      const double xi = overlap(r_end);
-      if (r_end < c.full_overlap_range_m || xi <= 0.0) continue;
-      const double d_min_mm = 1e3 * theta * r_end * r_end *
-                              std::sqrt(p_th * std::exp(2.0 * alpha * r_end) / kWaterFresnel);
-      if (d_min_mm > kMaxDropMm) break;
-    }
-    r_end = std::min(r_end, r_lim);
-    atm.rain_drops.Fill(r_lo, std::max(r_end, r_lo + 0.01), 0.02, [&](double r) {
-      const double xi = overlap(r);
-      if (xi <= 0.0) return 0.0;
-      // A drop filling the beam returns rho_w xi e^{-2 alpha r} / r^2; smaller
-      // drops return their share (D / theta r)^2 of it.
-      const double fill =
-          std::sqrt(p_th * r * r * std::exp(2.0 * alpha * r) / (kWaterFresnel * xi));
-      if (fill >= 1.0) return 0.0;
-      const double d_min_mm = std::max(kMinDropMm, 1e3 * theta * r * fill);
-      const double cone_area_m2 = kPi * theta * theta * r * r / 4.0;
-      return cone_area_m2 * kMarshallPalmerN0 / lambda * std::exp(-lambda * d_min_mm);
-    });
-  }
-
-  // The echoes of one beam whose hard target (if any) is at hit_m.
-  auto weather_echo = [&](double hit_m, core::RngStream& rng, std::optional<Echo>& best) {
-    auto offer = [&](const Echo& e) {
-      if (!best || (c.return_mode == LidarReturnMode::kStrongest ? e.power > best->power
-                                                                 : e.range_m > best->range_m))
-        best = e;
-    };
-    if (atm.fog) {
-      const RangeTable& f = atm.fog_echo;
-      const double fade = FogSpeckleFade(speckle_cells, rng);
-      const double level = p_th / fade;
-      if (f.value[atm.fog_peak] >= level) {
-        // S rises to its peak and falls after it: the part above `level` is
-        // one interval around the peak.
-        const auto rise_end = f.value.begin() + static_cast<std::ptrdiff_t>(atm.fog_peak) + 1;
-        const auto first = std::lower_bound(f.value.begin(), rise_end, level);
-        const auto last = std::lower_bound(rise_end - 1, f.value.end(), level,
-                                           [](double s, double lv) { return s >= lv; });
-        const double r_a = f.r0_m + f.step_m * static_cast<double>(first - f.value.begin());
-        const double r_b =
-            std::min(hit_m, f.r0_m + f.step_m * static_cast<double>(last - f.value.begin() - 1));
-        const double u = rng.Uniform();
-        if (r_b > r_a) {
-          const double ca = f.Cumulative(r_a), cb = f.Cumulative(r_b);
-          const double r = f.InverseCumulative(ca + u * (cb - ca));
-          offer({r, std::max(p_th, fade * f.Value(r)), true});
-        }
-      }
-    }
-    if (atm.rain) {
-      const RangeTable& d = atm.rain_drops;
-      const double r_end = std::min(hit_m, d.end_m());
-      const double mean = r_end > d.r0_m ? d.Cumulative(r_end) : 0.0;
-      const std::uint64_t drops = PoissonDraw(mean, rng);
-      const double theta = c.beam_divergence_mrad * 1e-3;
-      for (std::uint64_t k = 0; k < drops; ++k) {
-        const double r = d.InverseCumulative(rng.Uniform() * mean);
-        const double xi = overlap(r);
-        const double e2 = std::exp(-2.0 * alpha * r);
-        const double fill = std::sqrt(p_th * r * r / (e2 * kWaterFresnel * std::max(xi, 1e-12)));
-        const double d_min_mm = std::max(kMinDropMm, 1e3 * theta * r * fill);
-        // The Marshall-Palmer tail above d_min is exponential again.
-        const double d_mm = d_min_mm + rng.Exponential(1.0 / atm.rain_lambda_per_mm);
-        const double ratio = d_mm * 1e-3 / (theta * r);
-        const double share = std::min(1.0, ratio * ratio);
-        offer({r, std::max(p_th, kWaterFresnel * share * xi * e2 / (r * r)), true});
-      }
-    }
-  };
+  const Atmosphere atm = MakeAtmosphere(c, weather, overlap, threshold_, ray_length_m_, r_lo);
+  const bool needs_rng = c.range_noise_m > 0.0 || c.dropout > 0.0 || atm.active();
+  const float sat2 = static_cast<float>(c.saturation_range_m * c.saturation_range_m);
+  const BeamShading shading{
+      c,         scene_,    atm,  overlap,  threshold_, ray_length_m_, FogSpeckleCells(c),
+      frame_key, needs_rng, sat2, origin_w_};
 
   std::vector<LidarPoint> slots(beam_count_);
   std::vector<std::uint8_t> kinds(beam_count_, 0);  // 0: no return, 1: target, 2: spurious
-  const bool needs_rng = c.range_noise_m > 0.0 || c.dropout > 0.0 || atm.active();
-  const float sat2 = static_cast<float>(c.saturation_range_m * c.saturation_range_m);
-
   auto process_block = [&](std::size_t begin, std::size_t end) {
     std::array<Ray, kBlockBeams> rays;
     std::array<RayHit, kBlockBeams> hits;
@@ -420,32 +510,8 @@ PointCloudFrame Lidar::Capture(double t_start_s, const core::WeatherConfig& weat
     const std::size_t n = end - begin;
     BlockRays(begin, end, t_start_s, rays.data(), times.data());
     scene_.IntersectMany(rays.data(), hits.data(), n);
-    for (std::size_t j = 0; j < n; ++j) {
-      const std::size_t i = begin + j;
-      const RayHit& h = hits[j];
-      std::optional<Echo> best;
-      double hit_m = r_lim;
-      if (h.hit()) {
-        hit_m = h.t;
-        const double rho = std::clamp(scene_.material(h.material).lidar_reflectivity, 0.0, 1.0);
-        const double cos_i = std::abs(static_cast<double>(h.normal_w.dot(rays[j].direction)));
-        const double power =
-            rho * cos_i * overlap(hit_m) * std::exp(-2.0 * alpha * hit_m) / (hit_m * hit_m);
-        if (power >= p_th) best = Echo{hit_m, power, false};
-      }
-      if (!best && !atm.active()) continue;
-      std::optional<core::RngStream> rng;
-      if (needs_rng) rng.emplace(core::Mix64(frame_key ^ core::Mix64(i)));
-      if (atm.active()) weather_echo(hit_m, *rng, best);
-      if (!best) continue;
-      if (c.dropout > 0.0 && rng->Bernoulli(c.dropout)) continue;
-      double range_m = best->range_m;
-      if (c.range_noise_m > 0.0) range_m += c.range_noise_m * rng->Normal();
-      const Eigen::Vector3f p = origin_w_ + rays[j].direction * static_cast<float>(range_m);
-      slots[i] = {p.x(), p.y(), p.z(), std::min(1.0f, static_cast<float>(best->power) * sat2),
-                  times[j]};
-      kinds[i] = best->spurious ? 2 : 1;
-    }
+    for (std::size_t j = 0; j < n; ++j)
+      shading.Beam(begin + j, rays[j], hits[j], times[j], slots[begin + j], kinds[begin + j]);
   };
 
   auto run_blocks = [&](std::size_t first, std::size_t last) {
@@ -465,19 +531,7 @@ PointCloudFrame Lidar::Capture(double t_start_s, const core::WeatherConfig& weat
       run_blocks(first, last);
     }
   }
-
-  PointCloudFrame frame;
-  frame.t_start_s = t_start_s;
-  frame.rays_cast = beam_count_;
-  std::size_t count = 0;
-  for (std::uint8_t k : kinds) count += k != 0;
-  frame.points.reserve(count);
-  for (std::size_t i = 0; i < beam_count_; ++i) {
-    if (kinds[i] == 0) continue;
-    frame.points.push_back(slots[i]);
-    frame.spurious += kinds[i] == 2;
-  }
-  return frame;
+  return CollectPoints(t_start_s, slots, kinds);
 }
 
 }  // namespace uavsim::sensors

@@ -68,6 +68,34 @@ std::vector<double> BinPowerCorrelation(const std::vector<double>& w, int max_la
   return out;
 }
 
+// S(X, Y) = sum_{x in X, y in Y} |rho(x - y)|^2: the correlation of the
+// noise powers of two sets of cells along one axis (CFAR training variance).
+double PairSum(const std::vector<int>& x, const std::vector<int>& y,
+               const std::vector<double>& rho) {
+  double acc = 0.0;
+  for (int a : x)
+    for (int b : y) acc += rho[std::abs(a - b)];
+  return acc;
+}
+
+// Degrees of freedom of the snapshots' sample covariance: the cells of a
+// neighbourhood share noise through the windows, so K of them are worth
+// K^2 / sum_ij |C_ij|^2 independent ones (C their correlation; 3.5 of the
+// 9 cells of a 3 x 3 Hann neighbourhood). Forward-backward averaging adds
+// none for this purpose (MDL on an FB covariance over-counts, Xu, Roy &
+// Kailath, IEEE TSP 42(1), 1994). MDL needs it: with the nominal K it
+// finds phantom sources.
+double SnapshotDegreesOfFreedom(const std::vector<double>& wr, const std::vector<double>& wd,
+                                int h) {
+  const std::vector<double> cr = BinPowerCorrelation(wr, 2 * h);
+  const std::vector<double> cd = BinPowerCorrelation(wd, 2 * h);
+  double sr = 0.0, sd = 0.0;
+  for (int i = -h; i <= h; ++i)
+    for (int j = -h; j <= h; ++j) sr += cr[std::abs(i - j)], sd += cd[std::abs(i - j)];
+  const double k = (2.0 * h + 1.0) * (2.0 * h + 1.0);
+  return k * k / (sr * sd);
+}
+
 }  // namespace
 
 struct RadarProcessor::Fft {
@@ -137,6 +165,20 @@ double RadarProcessor::CaCfarThresholdFactor(double pfa, int training_cells, dou
 
 RadarProcessor::RadarProcessor(const FmcwRadarConfig& config)
     : config_(config), fft_(std::make_unique<Fft>()) {
+  CheckShape();
+  DeriveBinSizes();
+  const RadarProcessingConfig& p = config_.processing;
+  const std::vector<double> wr = Window(p.range_window, samples_);
+  const std::vector<double> wd = Window(p.doppler_window, chirps_);
+  MakeWindows(wr, wd);
+  const std::vector<bool> has_noise = MakeNoiseScale(wr, wd);
+  MakeCfarRows(wr, wd, has_noise);
+  snapshot_dof_ = SnapshotDegreesOfFreedom(wr, wd, p.snapshot_neighbourhood_cells);
+  MakeMusicGrid();
+  PlanFfts();
+}
+
+void RadarProcessor::CheckShape() {
   const RadarProcessingConfig& p = config_.processing;
   samples_ = config_.adc_samples;
   chirps_ = config_.chirps_per_frame;
@@ -162,21 +204,25 @@ RadarProcessor::RadarProcessor(const FmcwRadarConfig& config)
     throw std::invalid_argument("processing/max_sources: " + std::to_string(p.max_sources) +
                                 " sources need more than the array's " + std::to_string(antennas_) +
                                 " elements");
+}
 
+void RadarProcessor::DeriveBinSizes() {
   lambda_m_ = kSpeedOfLight_mps / (config_.carrier_ghz * 1e9);
   dx_m_ = config_.spacing_x_wavelengths * lambda_m_;
   dy_m_ = config_.spacing_y_wavelengths * lambda_m_;
   const double slope_hz_per_s = config_.bandwidth_mhz * 1e6 / (config_.chirp_duration_us * 1e-6);
   const double fs_hz = config_.sample_rate_msps * 1e6;
+  // Step 1: range_bin_m = c fs / (2 K Ns).
   range_bin_m_ = kSpeedOfLight_mps * fs_hz / (2.0 * slope_hz_per_s * samples_);
   const double chirp_period_s = (config_.chirp_duration_us + config_.idle_time_us) * 1e-6;
+  // Step 3: velocity_bin_mps = lambda / (2 Nc T_c).
   velocity_bin_mps_ = lambda_m_ / (2.0 * chirps_ * chirp_period_s);
+}
 
-  // Windows. The Doppler weights also carry exp(j 2 pi c h / Nc), h =
-  // floor(Nc / 2), which shifts the spectrum by h bins: the FFT's output is
-  // then already fftshifted, at no extra pass.
-  const std::vector<double> wr = Window(p.range_window, samples_);
-  const std::vector<double> wd = Window(p.doppler_window, chirps_);
+void RadarProcessor::MakeWindows(const std::vector<double>& wr, const std::vector<double>& wd) {
+  // The Doppler weights also carry exp(j 2 pi c h / Nc), h = floor(Nc / 2),
+  // which shifts the spectrum by h bins: the FFT's output is then already
+  // fftshifted, at no extra pass.
   range_window_.assign(wr.begin(), wr.end());
   doppler_weights_.resize(chirps_);
   mean_weights_.resize(chirps_);
@@ -187,12 +233,18 @@ RadarProcessor::RadarProcessor(const FmcwRadarConfig& config)
         std::polar(wd[c], 2.0 * kPi * static_cast<double>(c) * shift / chirps_));
     mean_weights_[c] = static_cast<float>(wd[c] / sum_wd);
   }
+}
 
+std::vector<bool> RadarProcessor::MakeNoiseScale(const std::vector<double>& wr,
+                                                 const std::vector<double>& wd) {
   // Noise power of each Doppler bin for unit white noise per sample. With
   // clutter removal bin d is sum_c (q_c - Q w_c / sum w) x_c, q_c its
   // weights and Q their sum: zero at zero Doppler, changed next to it (the
   // window's own DFT is non-zero there), untouched elsewhere. Dividing it
   // out keeps the CFAR's noise estimate right next to the notch.
+  const RadarProcessingConfig& p = config_.processing;
+  const int shift = chirps_ / 2;
+  const double sum_wd = std::accumulate(wd.begin(), wd.end(), 0.0);
   double sum_wr2 = 0.0;
   for (double x : wr) sum_wr2 += x * x;
   double sum_wd2 = 0.0;
@@ -212,35 +264,34 @@ RadarProcessor::RadarProcessor(const FmcwRadarConfig& config)
     // The zero-Doppler bin holds nothing after clutter removal: it stays 0
     // and is neither tested nor used for training.
     has_noise[d] = var > 1e-9 * sum_wd2;
+    // Step 4: 1 / (M sum(w_r^2) sum|q - Q w / sum w|^2).
     if (has_noise[d]) power_scale_[d] = static_cast<float>(1.0 / (antennas_ * sum_wr2 * var));
   }
+  return has_noise;
+}
 
-  // CFAR: the training cells of Doppler bin d are the window rectangle
-  // minus the guard rectangle, without rows that hold no noise. Cov(P_i,
-  // P_j) of two noise-only cells is M |rho_r|^2 |rho_d|^2 (complex Gaussian
-  // fourth moments; one antenna's cell has unit mean), and both rectangles
-  // are products of a range and a Doppler interval, so the variance of the
+void RadarProcessor::MakeCfarRows(const std::vector<double>& wr, const std::vector<double>& wd,
+                                  const std::vector<bool>& has_noise) {
+  // The training cells of Doppler bin d are the window rectangle minus the
+  // guard rectangle, without rows that hold no noise. Cov(P_i, P_j) of two
+  // noise-only cells is M |rho_r|^2 |rho_d|^2 (complex Gaussian fourth
+  // moments; one antenna's cell has unit mean), and both rectangles are
+  // products of a range and a Doppler interval, so the variance of the
   // training sum separates:
   //   sum_{T x T} = S_r(B, B) S_d(B, B) - 2 S_r(B, G) S_d(B, G) + S_r(G, G) S_d(G, G)
   // with S(X, Y) = sum_{x in X, y in Y} |rho(x - y)|^2, B the window and G
   // the guard intervals.
+  const RadarProcessingConfig& p = config_.processing;
   const std::vector<double> rho_r = BinPowerCorrelation(wr, 2 * cfar_half_range_);
   const std::vector<double> rho_d = BinPowerCorrelation(wd, 2 * cfar_half_doppler_);
-  const auto pair_sum = [](const std::vector<int>& x, const std::vector<int>& y,
-                           const std::vector<double>& rho) {
-    double acc = 0.0;
-    for (int a : x)
-      for (int b : y) acc += rho[std::abs(a - b)];
-    return acc;
-  };
   std::vector<int> range_window, range_guard;
   for (int dr = -cfar_half_range_; dr <= cfar_half_range_; ++dr) {
     range_window.push_back(dr);
     if (std::abs(dr) <= p.cfar_guard_range_cells) range_guard.push_back(dr);
   }
-  const double sr_bb = pair_sum(range_window, range_window, rho_r);
-  const double sr_bg = pair_sum(range_window, range_guard, rho_r);
-  const double sr_gg = pair_sum(range_guard, range_guard, rho_r);
+  const double sr_bb = PairSum(range_window, range_window, rho_r);
+  const double sr_bg = PairSum(range_window, range_guard, rho_r);
+  const double sr_gg = PairSum(range_guard, range_guard, rho_r);
   std::map<std::vector<bool>, CfarRow> by_pattern;  // few distinct: away from zero Doppler, one
   cfar_rows_.resize(chirps_);
   for (int d = 0; d < chirps_; ++d) {
@@ -259,9 +310,10 @@ RadarProcessor::RadarProcessor(const FmcwRadarConfig& config)
       row.training_cells = static_cast<int>(range_window.size() * doppler_window.size() -
                                             range_guard.size() * doppler_guard.size());
       if (row.training_cells > 0) {
-        const double sum_rho = sr_bb * pair_sum(doppler_window, doppler_window, rho_d) -
-                               2.0 * sr_bg * pair_sum(doppler_window, doppler_guard, rho_d) +
-                               sr_gg * pair_sum(doppler_guard, doppler_guard, rho_d);
+        const double sum_rho = sr_bb * PairSum(doppler_window, doppler_window, rho_d) -
+                               2.0 * sr_bg * PairSum(doppler_window, doppler_guard, rho_d) +
+                               sr_gg * PairSum(doppler_guard, doppler_guard, rho_d);
+        // Step 5: the Gamma moment match, shape N^2 M / sum and scale sum / N.
         const double n = row.training_cells;
         row.shape = n * n * antennas_ / sum_rho;
         row.scale = sum_rho / n;
@@ -273,32 +325,17 @@ RadarProcessor::RadarProcessor(const FmcwRadarConfig& config)
     }
     cfar_rows_[d] = it->second;
   }
-  // Degrees of freedom of the snapshots' sample covariance: the cells of a
-  // neighbourhood share noise through the windows, so K of them are worth
-  // K^2 / sum_ij |C_ij|^2 independent ones (C their correlation; 3.5 of the
-  // 9 cells of a 3 x 3 Hann neighbourhood). Forward-backward averaging adds
-  // none for this purpose (MDL on an FB covariance over-counts, Xu, Roy &
-  // Kailath, IEEE TSP 42(1), 1994). MDL needs it: with the nominal K it
-  // finds phantom sources.
-  {
-    const int h = p.snapshot_neighbourhood_cells;
-    const std::vector<double> cr = BinPowerCorrelation(wr, 2 * h);
-    const std::vector<double> cd = BinPowerCorrelation(wd, 2 * h);
-    double sr = 0.0, sd = 0.0;
-    for (int i = -h; i <= h; ++i)
-      for (int j = -h; j <= h; ++j) sr += cr[std::abs(i - j)], sd += cd[std::abs(i - j)];
-    const double k = (2.0 * h + 1.0) * (2.0 * h + 1.0);
-    snapshot_dof_ = k * k / (sr * sd);
-  }
-
   // The accessors report the rows far from zero Doppler (all rows used).
   for (int d = 0; d < chirps_; ++d)
     if (cfar_rows_[d].tested && cfar_rows_[d].training_cells > cfar_full_.training_cells)
       cfar_full_ = cfar_rows_[d];
+}
 
+void RadarProcessor::MakeMusicGrid() {
   // MUSIC's coarse grid over the field of view, front hemisphere only (the
   // planar array cannot tell front from back); an axis with one element
   // carries no information and is pinned at 0.
+  const RadarProcessingConfig& p = config_.processing;
   const auto axis = [&](double fov_deg, int elements) {
     std::vector<double> v;
     if (elements < 2) return std::vector<double>{0.0};
@@ -317,12 +354,14 @@ RadarProcessor::RadarProcessor(const FmcwRadarConfig& config)
       grid_.push_back({az[ia], el[ie]});
       grid_steering_.row(ie * grid_az_ + ia) = Steering(grid_.back()).adjoint();
     }
+}
 
-  // FFTW plans. FFTW_ESTIMATE: the plan, hence every rounding, does not
-  // depend on timing, so a seed gives the same frames bit for bit. All
-  // buffers are 64-byte aligned, as these planning arrays are, so the plans
-  // may run on them (new-array execution, thread-safe).
-  const int beam_n = p.beamscan_fft_size;
+void RadarProcessor::PlanFfts() {
+  // FFTW_ESTIMATE: the plan, hence every rounding, does not depend on
+  // timing, so a seed gives the same frames bit for bit. All buffers are
+  // 64-byte aligned, as these planning arrays are, so the plans may run on
+  // them (new-array execution, thread-safe).
+  const int beam_n = config_.processing.beamscan_fft_size;
   fft_->beam_x = nx_ > 1 ? std::max(beam_n, nx_) : 1;
   fft_->beam_y = ny_ > 1 ? std::max(beam_n, ny_) : 1;
   {

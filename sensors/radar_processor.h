@@ -251,6 +251,19 @@ class RadarProcessor {
  private:
   struct Fft;  // FFTW plans (FFTW stays private to sensors/)
 
+  // The constructor's calibration, in order: the frame's shape and the
+  // checks on it; wavelength, spacings and bin sizes; the windows (wr in
+  // range, wd in Doppler); step 4's noise scale per Doppler bin (returns
+  // which bins hold noise); step 5's CFAR rows; MUSIC's grid; the FFTW plans.
+  void CheckShape();
+  void DeriveBinSizes();
+  void MakeWindows(const std::vector<double>& wr, const std::vector<double>& wd);
+  std::vector<bool> MakeNoiseScale(const std::vector<double>& wr, const std::vector<double>& wd);
+  void MakeCfarRows(const std::vector<double>& wr, const std::vector<double>& wd,
+                    const std::vector<bool>& has_noise);
+  void MakeMusicGrid();
+  void PlanFfts();
+
   void TransformInto(const RadarCube& cube, RangeDopplerCube& rd) const;
   void CheckCube(const RadarCube& cube) const;
   AngleOfArrival FromDirectionCosines(double u_y, double u_z) const;
