@@ -28,6 +28,14 @@ using core::Modality;
 using core::ModalityFromName;
 using core::ModalityName;
 
+// What a message carries for the edge besides its latent (the node's
+// pre-processed measurement): opaque to the channel, which only moves it.
+// The engine's sensing node defines the one kind (sim/sensing_node.h:
+// NodeContent, read back with ContentOf).
+struct MessageContent {
+  virtual ~MessageContent() = default;
+};
+
 struct Message {
   std::uint32_t node = 0;  // the sender's index in the scenario's node list
   Modality modality = Modality::kCamera;
@@ -36,8 +44,8 @@ struct Message {
   std::uint32_t payload_bytes = 0;  // application bytes (header included), >= 1
   std::vector<float> latent;        // the IB latent; empty until the encoder lands
   // What else the node sent (its pre-processed measurement for the edge's
-  // classical filter), opaque to the channel; payload_bytes counts it.
-  std::shared_ptr<const void> content;
+  // classical filter); payload_bytes counts it.
+  std::shared_ptr<const MessageContent> content;
 };
 
 constexpr std::uint32_t kMessageHeaderBytes = 16;

@@ -6,12 +6,23 @@
 // FisheyeStereo's image formation; see fisheye_stereo.h for the formulas.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 
-#include "sensors/frame_timing.h"
 #include "core/pose.h"
+#include "sensors/frame_timing.h"
 
 namespace uavsim::sensors {
+
+// The optical frame C of each eye in the body frame B of its pose (REP 103):
+// z_C = x_B, x_C = -y_B, y_C = -z_B (the columns are C's axes written in B).
+inline Eigen::Matrix3d R_BC() {
+  Eigen::Matrix3d R;
+  R << 0, 0, 1,  //
+      -1, 0, 0,  //
+      0, -1, 0;
+  return R;
+}
 
 struct FisheyeStereoConfig {
   FrameTiming timing{30.0};  // paper: f_c = 30 Hz

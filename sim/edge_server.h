@@ -4,31 +4,14 @@
 // localization method, and at each alignment window's deadline asks every
 // method for its estimate of the target at the window's end.
 //
-// Methods (/pipeline/methods), every one scored on the same windows:
-//   ekf              the classical baseline (pipeline/baselines/): fuses the
-//                    pre-processed measurements as they arrive
-//   uavloc           the paper's pipeline: the trained model's edge network
-//                    (pipeline/edge/: TE-Align, MADW, MICA, Mamba, linear
-//                    head) on each window's IB-CC latents
-//   uavloc_camera, uavloc_lidar, uavloc_radar
-//                    another copy of it fed one modality's latents, each
-//                    with its own state (the paper's single-modality rows)
-//   NAME[SUBSET]     a learned method (uavloc or a variant) fed a subset of
-//                    the modalities, e.g. uavloc[camera+lidar] (Fig. 10)
-//   gru, tcn, no_mica, early_fusion, ...
-//                    a variant of the paper's pipeline (Sec. VI baselines and
-//                    ablations, pipeline/variants.h): the edge head
-//                    of the model folder beside /pipeline/model named
-//                    FOLDER-VARIANT (trained with `uavsim train --variant V
-//                    --encoders FOLDER`: the nodes' encoders are shared), or
-//                    of /pipeline/model itself when that model is the variant
-//   uavloc_anchored  our extension: the model's anchored head, which picks
-//                    among the nodes' geometric anchors (pipeline/anchored/)
-//   anchor_track     that head's anchor filter alone (anchor_track.h): no
-//                    learning; what uavloc_anchored's network adds over it
-//   {"type": "torchscript", "name": NAME, "edge": FILE}
-//                    a user's edge model (pipeline/edge/scripted_edge.h) on
-//                    the latents uavloc gets, under NAME; steers a beam
+// Methods (/pipeline/methods), every one scored on the same windows, each
+// a pipeline::LocalizationMethod (pipeline/localization_method.h) in one
+// list: ekf (the classical baseline), uavloc (the paper's pipeline),
+// uavloc_camera/_lidar/_radar and NAME[SUBSET] (it or a variant fed a subset
+// of the modalities), the paper's variants (gru, no_mica, ...),
+// uavloc_anchored (our anchored head), anchor_track (its filter alone) and
+// users' TorchScript models; pipeline/model_catalog.h resolves the learned
+// and TorchScript ones to their model folders, once per run.
 // The nodes send their geometric anchors with their latents only when
 // uavloc_anchored or anchor_track runs (MessageBytes counts them).
 //
@@ -46,23 +29,19 @@
 
 #include "channel/edge_receiver.h"
 #include "channel/packet.h"
-#include "pipeline/anchored/anchor_track.h"
-#include "pipeline/baselines/ekf.h"
-#include "pipeline/edge/edge_localizer.h"
-#include "pipeline/edge/scripted_edge.h"
-#include "pipeline/edge/te_align.h"
-#include "pipeline/model_bundle.h"
-#include "pipeline/node/node_encoder.h"
 #include "core/json_io.h"
 #include "core/wall_profile.h"
+#include "pipeline/baselines/ekf.h"
+#include "pipeline/localization_method.h"
+#include "pipeline/model_catalog.h"
+#include "pipeline/node/node_encoder.h"
 #include "sim/scenario.h"
 #include "sim/sensing_node.h"
 
 namespace uavsim::sim {
 
-// Whether the scenario runs a method that needs a trained model (uavloc, its
-// single-modality ablations, uavloc_anchored).
-bool NeedsTrainedModel(const Scenario& s);
+// What the model catalog reads of the scenario (`file`: the name errors give).
+pipeline::CatalogScenario CatalogOf(const Scenario& s, const std::string& file);
 
 // What `validate` checks of that model: the manifest exists and parses,
 // the folder's checksums hold, it has the edge head each method needs, and
@@ -126,38 +105,20 @@ class EdgeServer {
   // metrics.json's "uavloc_model" (path, trained_for, same_layout, heads:
   // the edge heads the model holds, "paper" and/or "anchored"); null
   // without a model.
-  const core::Json& model_info() const { return model_info_; }
+  const core::Json& model_info() const;
 
   // Times each method into `profile` ("edge/<method>"); null: no timing.
   void set_profile(core::WallProfile* profile) { profile_ = profile; }
 
  private:
-  bool Runs(const std::string& method) const;
-  bool SendsAnchors() const;
-
   const Scenario& scenario_;
   channel::EdgeReceiver receiver_;
   core::SimTime window_ns_;
-  std::unique_ptr<pipeline::Ekf> ekf_;
-  std::unique_ptr<pipeline::UavLocModelFiles> model_;
-  core::Json model_info_;
-  std::unique_ptr<pipeline::EdgeLocalizer> uavloc_;           // the paper's head
-  std::unique_ptr<pipeline::EdgeLocalizer> uavloc_anchored_;  // ours
-  std::unique_ptr<pipeline::AnchorTrack> anchor_track_;
-  // The variants' models other than model_ (variant -> files): their edge
-  // heads run on the latents of model_'s encoders, which they share.
-  std::map<std::string, std::unique_ptr<pipeline::UavLocModelFiles>> variant_models_;
-  // The learned methods other than uavloc: the modalities each is fed (bit
-  // m: Modality m) and its own edge network (a copy, with its own state).
-  struct Learned {
-    int modalities = 7;
-    std::unique_ptr<pipeline::EdgeLocalizer> edge;
-  };
-  std::map<std::string, Learned> learned_;
-  // The users' TorchScript methods (/pipeline/methods objects), by name.
-  std::map<std::string, std::unique_ptr<pipeline::ScriptedEdge>> scripted_;
-  std::map<std::int64_t, pipeline::WindowInputs> pending_;           // window k -> latents arrived
-  std::map<std::int64_t, pipeline::WindowAnchors> pending_anchors_;  // for anchor_track
+  std::unique_ptr<pipeline::ModelCatalog> catalog_;  // null when no method runs
+  // In the order the downlink scores them (SteeredMethods).
+  std::vector<std::unique_ptr<pipeline::LocalizationMethod>> methods_;
+  pipeline::MethodNeeds needs_;                               // what any of them needs
+  std::map<std::int64_t, pipeline::WindowArrivals> pending_;  // window k -> what arrived
   core::WallProfile* profile_ = nullptr;
 };
 

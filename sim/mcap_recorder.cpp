@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "core/physical_constants.h"
 #include "core/time.h"
 #include "sim/foxglove_schemas.h"
 #include "sim/version.h"
@@ -93,10 +94,8 @@ Json Transform(std::uint64_t ns, const std::string& child, const Eigen::Isometry
 // y_C = -z_B, z_C = x_B (sensors/fisheye_stereo.h); the right eye
 // baseline_m along x_C.
 Eigen::Isometry3d X_WEye(const sensors::FisheyeStereoConfig& c, bool right) {
-  Eigen::Matrix3d R_BC;
-  R_BC << 0, 0, 1, -1, 0, 0, 0, -1, 0;
   Eigen::Isometry3d X = c.pose.ToIsometry();
-  X.linear() = X.linear() * R_BC;
+  X.linear() = X.linear() * sensors::R_BC();
   return right ? X * Eigen::Translation3d(c.baseline_m, 0.0, 0.0) : X;
 }
 
@@ -116,7 +115,7 @@ std::pair<Eigen::Vector4d, double> FitKannalaBrandt(const sensors::FisheyeStereo
   const double corner = std::hypot(du, dv);
   constexpr int kSamples = 400;
   double theta_max = 0.0;
-  for (double t = 1e-3; t < M_PI - 1e-3; t += 1e-3) {
+  for (double t = 1e-3; t < core::kPi - 1e-3; t += 1e-3) {
     if (std::cos(t) + c.xi <= 0.0 || mei(t) <= mei(theta_max)) break;
     theta_max = t;
     if (mei(t) >= corner) break;

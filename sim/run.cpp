@@ -8,8 +8,6 @@
 #include <set>
 
 #include "channel/uplink.h"
-#include "results/csv.h"
-#include "results/run_directory.h"
 #include "core/interrupt.h"
 #include "core/periodic_process.h"
 #include "core/progress.h"
@@ -17,6 +15,8 @@
 #include "core/simulator.h"
 #include "core/time.h"
 #include "core/wall_profile.h"
+#include "results/csv.h"
+#include "results/run_directory.h"
 #include "sim/edge_server.h"
 #include "sim/recorder.h"
 #include "sim/run_writer.h"
@@ -76,14 +76,11 @@ Uplinks MakeUplinks(core::Simulator& sim, const Scenario& s, EdgeServer& edge,
         sim, config, s.weather, core::RngStream(s.seed, "link/" + name), node_ids);
     link->SetArrivalCallback([&edge, collector](const channel::Message& m, core::SimTime t) {
       const bool on_time = edge.OnArrival(m, t);
-      if (collector && m.content)
-        collector->OnArrival(*static_cast<const NodeContent*>(m.content.get()), core::ToSeconds(t),
-                             on_time);
+      if (collector && m.content) collector->OnArrival(ContentOf(m), core::ToSeconds(t), on_time);
     });
     link->SetLossCallback([&edge, collector](const channel::Message& m, channel::LossCause) {
       edge.OnLost(m);
-      if (collector && m.content)
-        collector->OnLost(*static_cast<const NodeContent*>(m.content.get()));
+      if (collector && m.content) collector->OnLost(ContentOf(m));
     });
     links.emplace(name, std::move(link));
   }

@@ -4,16 +4,14 @@
 #include <cmath>
 #include <vector>
 
+#include "core/physical_constants.h"
 #include "sensors/fisheye_model.h"
 #include "sensors/raycast_scene.h"
-#include "core/physical_constants.h"
 
 namespace uavsim::sim {
 namespace {
 
 using results::FormatFixed;
-
-constexpr double kPi = 3.14159265358979323846;
 
 // The target's path sampled every 0.25 s (its closed form: no simulation).
 std::vector<Eigen::Vector3d> TargetPath(const Scenario& s, const WorldModel& world) {
@@ -55,10 +53,10 @@ double HalfFieldOfView(const sensors::SensorConfig& c) {
   switch (c.type) {
     case sensors::SensorType::kLidar:
       return c.lidar.preset == sensors::LidarPreset::kLivoxRosette
-                 ? 0.5 * c.lidar.fov_deg * kPi / 180
-                 : kPi;
+                 ? 0.5 * c.lidar.fov_deg * core::kPi / 180
+                 : core::kPi;
     case sensors::SensorType::kFmcwRadar:
-      return 0.5 * c.radar.fov_azimuth_deg * kPi / 180.0;
+      return 0.5 * c.radar.fov_azimuth_deg * core::kPi / 180.0;
     default: {
       // The widest ray along the image's middle row (optical axis +z).
       const sensors::FisheyeModel model(c.fisheye);
@@ -69,7 +67,7 @@ double HalfFieldOfView(const sensors::SensorConfig& c) {
         if (ray.squaredNorm() > 0)
           widest = std::max(widest, std::acos(std::clamp(ray.z(), -1.0, 1.0)));
       }
-      return std::min(widest, kPi);
+      return std::min(widest, core::kPi);
     }
   }
 }
@@ -144,11 +142,12 @@ results::CsvTable LayoutTable(const Scenario& s, const WorldModel& world) {
     const Eigen::Vector3d forward = X_WS.linear().col(0);
     const double azimuth = std::atan2(forward.y(), forward.x());
     const double half = HalfFieldOfView(n.sensor);
-    const bool full = half >= kPi - 1e-9;
+    const bool full = half >= core::kPi - 1e-9;
     const int arc_points = 48;
     if (!full) row(n.id, "fov", p);
     for (int k = 0; k <= arc_points; ++k) {
-      const double a = full ? 2 * kPi * k / arc_points : azimuth - half + 2 * half * k / arc_points;
+      const double a =
+          full ? 2 * core::kPi * k / arc_points : azimuth - half + 2 * half * k / arc_points;
       row(n.id, "fov", p + radius * Eigen::Vector3d(std::cos(a), std::sin(a), 0.0));
     }
     if (!full) row(n.id, "fov", p);

@@ -221,9 +221,8 @@ std::filesystem::path RequireFile(const std::string& file, const std::string& po
   return p;
 }
 
-// Checks that involve more than one struct: unique ids, link references,
-// referenced files, and the resource guard.
-void CheckScenario(const Scenario& s, const std::string& file) {
+// Unique UAV and node ids; every node's uplink names a link.
+void CheckIds(const Scenario& s, const std::string& file) {
   std::set<std::string> ids;
   for (std::size_t i = 0; i < s.uavs.size(); ++i)
     if (!ids.insert(s.uavs[i].id).second)
@@ -244,9 +243,12 @@ void CheckScenario(const Scenario& s, const std::string& file) {
                             "\" in /links (known: " + (known.empty() ? "none" : known) + ")");
     }
   }
-  // The camera pre-processing's stereo search spans disparities up to
-  // f b / stereo_min_range_m (pipeline/node/camera_preprocessor.h): more than
-  // the rectified image is wide cannot be searched.
+}
+
+// The camera pre-processing's stereo search spans disparities up to
+// f b / stereo_min_range_m (pipeline/node/camera_preprocessor.h): more than
+// the rectified image is wide cannot be searched.
+void CheckStereoSearch(const Scenario& s, const std::string& file) {
   const auto& cam = s.pipeline.preprocess.camera;
   for (std::size_t i = 0; i < s.nodes.size(); ++i) {
     const sensors::SensorConfig& sensor = s.nodes[i].sensor;
@@ -264,6 +266,12 @@ void CheckScenario(const Scenario& s, const std::string& file) {
                             std::to_string(cam.rectified_width_px) + " px), got " +
                             core::FormatNumber(cam.stereo_min_range_m));
   }
+}
+
+// Link names, their outages' nodes, and the files the scenario references
+// (the model folder, a city mesh, loaded here so that validate refuses what
+// run could not build).
+void CheckLinksAndFiles(const Scenario& s, const std::string& file) {
   for (const auto& [name, link] : s.links) {
     if (!IsValidId(name))
       throw ConfigError(file, "/links/" + core::EscapePointerToken(name),
@@ -297,6 +305,11 @@ void CheckScenario(const Scenario& s, const std::string& file) {
       throw ConfigError(file, "/world/city/path", p.string() + ": " + e.message());
     }
   }
+}
+
+// The resource guard: rays and bytes per frame, memory, rays per simulated
+// second and per run, truth rows.
+void CheckResources(const Scenario& s, const std::string& file) {
   const ResourceEstimate e = EstimateResources(s);
   auto node_sensor = [](std::size_t i) { return "/nodes/" + std::to_string(i) + "/sensor"; };
   if (e.max_frame_rays > kMaxRaysPerFrame)
@@ -332,6 +345,14 @@ void CheckScenario(const Scenario& s, const std::string& file) {
                       "refused: truth.csv would have " + Sci(truth_rows) + " rows (about " +
                           Sci(truth_rows * 70.0) + " bytes); the limit is " + Sci(kMaxTruthRows) +
                           " rows");
+}
+
+// Checks that involve more than one struct.
+void CheckScenario(const Scenario& s, const std::string& file) {
+  CheckIds(s, file);
+  CheckStereoSearch(s, file);
+  CheckLinksAndFiles(s, file);
+  CheckResources(s, file);
 }
 
 }  // namespace

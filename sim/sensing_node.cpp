@@ -5,6 +5,9 @@
 #include <stdexcept>
 #include <utility>
 
+#include "core/error.h"
+#include "core/interrupt.h"
+#include "core/json_io.h"
 #include "pipeline/node/camera_preprocessor.h"
 #include "pipeline/node/lidar_preprocessor.h"
 #include "pipeline/node/radar_preprocessor.h"
@@ -12,9 +15,6 @@
 #include "sensors/fmcw_radar.h"
 #include "sensors/lidar.h"
 #include "sensors/radar_processor.h"
-#include "core/error.h"
-#include "core/interrupt.h"
-#include "core/json_io.h"
 #include "sim/recorder.h"
 #include "sim/world_model.h"
 
@@ -211,6 +211,12 @@ class RadarNodeSensor final : public NodeSensor {
 };
 
 }  // namespace
+
+const NodeContent& ContentOf(const channel::Message& m) {
+  const auto* content = dynamic_cast<const NodeContent*>(m.content.get());
+  if (!content) throw std::logic_error("a message without a sensing node's content");
+  return *content;
+}
 
 bool NodeContent::FoundSomething() const {
   return (camera && camera->detected) || (points && points->count() > 0);

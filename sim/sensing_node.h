@@ -21,12 +21,12 @@
 #include "channel/edge_receiver.h"
 #include "channel/packet.h"
 #include "channel/uplink.h"
-#include "pipeline/node/node_encoder.h"
-#include "pipeline/node/observations.h"
 #include "core/periodic_process.h"
 #include "core/rng.h"
 #include "core/simulator.h"
 #include "core/wall_profile.h"
+#include "pipeline/node/node_encoder.h"
+#include "pipeline/node/observations.h"
 #include "sim/scenario.h"
 
 namespace uavsim::sim {
@@ -37,7 +37,7 @@ class WorldModel;
 // What a node's message carries besides its size, opaque to the channel:
 // the pre-processed measurement (for the edge's classical filter and the
 // anchored head's anchors) and the IB-CC latent.
-struct NodeContent {
+struct NodeContent : channel::MessageContent {
   std::string node_id;
   std::optional<pipeline::CameraObservation> camera;
   std::optional<pipeline::PointObservation> points;
@@ -50,6 +50,10 @@ struct NodeContent {
   // plus their geometry, or the points as float32; 0 when nothing was found.
   std::uint64_t PreprocessedBytes() const;
 };
+
+// The content a sensing node put in `m` (m.content must be set). Throws
+// std::logic_error for content of another kind.
+const NodeContent& ContentOf(const channel::Message& m);
 
 // A sensor behind one interface, in two stages: Acquire poses its view of
 // the world at t_s and captures (drawing from `noise`); the function it

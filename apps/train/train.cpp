@@ -11,17 +11,17 @@
 #include <iterator>
 #include <memory>
 
-#include "pipeline/model_bundle.h"
-#include "pipeline/torch_runtime.h"
-#include "pipeline/training/dataset_io.h"
-#include "results/run_directory.h"
+#include "apps/sweep/process_farm.h"
+#include "apps/train/held_out_scores.h"
 #include "core/error.h"
 #include "core/file_lock.h"
 #include "core/progress.h"
 #include "core/rng.h"
 #include "core/trajectory.h"
-#include "apps/train/held_out_scores.h"
-#include "apps/sweep/process_farm.h"
+#include "pipeline/model_bundle.h"
+#include "pipeline/torch_runtime.h"
+#include "pipeline/training/dataset_io.h"
+#include "results/run_directory.h"
 #include "sim/run.h"
 
 namespace uavsim::sim {
@@ -128,9 +128,11 @@ Scenario EpisodeScenario(const Scenario& base, const EpisodePlan& plan, int i, s
   doc["name"] = base.name + "-episode-" + std::to_string(i);
   doc["pipeline"]["methods"] = core::Json::array();
   if (plan.vary_weather) {
-    doc["weather"]["rain_mm_h"] = rng.Bernoulli(0.2) ? rng.Uniform(1.0, 25.0) : 0.0;
-    if (rng.Bernoulli(0.1))
-      doc["weather"]["fog_visibility_m"] = rng.Uniform(300.0, 2000.0);
+    doc["weather"]["rain_mm_h"] = rng.Bernoulli(plan.rain_probability)
+                                      ? rng.Uniform(plan.rain_min_mm_h, plan.rain_max_mm_h)
+                                      : 0.0;
+    if (rng.Bernoulli(plan.fog_probability))
+      doc["weather"]["fog_visibility_m"] = rng.Uniform(plan.fog_min_m, plan.fog_max_m);
     else
       doc["weather"].erase("fog_visibility_m");
     const double rain = doc["weather"]["rain_mm_h"].get<double>();
@@ -141,7 +143,7 @@ Scenario EpisodeScenario(const Scenario& base, const EpisodePlan& plan, int i, s
               " m";
   }
   if (plan.vary_loss) {
-    const double p = rng.Uniform(0.0, 0.3);
+    const double p = rng.Uniform(0.0, plan.loss_max);
     for (auto& [name, link] : doc["links"].items())
       link["loss"] = {{"type", "bernoulli"}, {"p", p}};
     what += ", loss " + core::FormatNumber(std::round(p * 100)) + " %";

@@ -28,9 +28,18 @@ struct EpisodePlan {
   int episodes = 40;         // trajectories
   double episode_s = 20.0;   // simulated seconds each
   std::uint64_t seed = 1;    // draws the variations
-  bool vary_weather = true;  // rain and fog draws
-  bool vary_loss = true;     // uplink Bernoulli loss in [0, 0.3]
+  bool vary_weather = true;  // rain and fog draws (below)
+  bool vary_loss = true;     // uplink Bernoulli loss draws (below)
   int first_episode = 0;     // index of the first episode (held-out sets use others)
+  // The draws of each episode: rain with this probability at a rate uniform
+  // in [rain_min_mm_h, rain_max_mm_h], else none; fog with this probability
+  // at a visibility uniform in [fog_min_m, fog_max_m], else none; one
+  // Bernoulli loss probability uniform in [0, loss_max] for every link.
+  double rain_probability = 0.2;
+  double rain_min_mm_h = 1.0, rain_max_mm_h = 25.0;
+  double fog_probability = 0.1;
+  double fog_min_m = 300.0, fog_max_m = 2000.0;
+  double loss_max = 0.3;
 };
 
 // The scenario of episode i: `base` with the target's trajectory, seed,

@@ -237,69 +237,12 @@ void AnchorFilter::Observe(Modality m, const GeometricAnchor& a) {
   // that agrees with the ray may take it over.
   const bool live = started_ && a.t_s - last_ranging_s_ <= kMaxCoast_s;
   if (is_ray) {
-    ray_ = a;
-    if (!started_) return;
-    PredictTo(a.t_s);
-    // An orthonormal pair normal to the ray.
-    const Eigen::Vector3d& d = a.direction_w;
-    const Eigen::Vector3d e1 = d.unitOrthogonal();
-    const Eigen::Vector3d e2 = d.cross(e1);
-    const double rho = std::max(1.0, (x_.head<3>() - a.origin_w).dot(d));
-    const double var = std::pow(rho * kRaySigma_rad, 2) + kRayFloor_m * kRayFloor_m;
-    Update<2>(
-        [&](const Vector10d& x) {
-          const Eigen::Vector3d r = x.head<3>() - a.origin_w;
-          Eigen::Matrix<double, 2, 10> h = Eigen::Matrix<double, 2, 10>::Zero();
-          h.block<1, 3>(0, 0) = e1.transpose();
-          h.block<1, 3>(1, 0) = e2.transpose();
-          return std::pair{Eigen::Vector2d(-e1.dot(r), -e2.dot(r)), h};
-        },
-        Eigen::Matrix2d(var * Eigen::Matrix2d::Identity()));
+    ObserveRay(a);
     return;
   }
-  bool accepted = false;
   if (started_) {
     PredictTo(a.t_s);
-    // A position measurement z_p: innovation z_p - p, Jacobian [I 0].
-    const auto position = [](const Eigen::Vector3d& z_p) {
-      return [z_p](const Vector10d& x) {
-        Eigen::Matrix<double, 3, 10> h = Eigen::Matrix<double, 3, 10>::Zero();
-        h.leftCols<3>().setIdentity();
-        return std::pair{Eigen::Vector3d(z_p - x.head<3>()), h};
-      };
-    };
-    if (m == Modality::kLidar) {
-      accepted = Update<3>(position(a.origin_w), Eigen::Matrix3d(kLidarSigma_m * kLidarSigma_m *
-                                                                 Eigen::Matrix3d::Identity()));
-    } else {
-      // The cluster's position (RadarFixOf) and its radial velocity (u . v
-      // at the predicted position).
-      const RadarFix fix = RadarFixOf(a);
-      const Eigen::Matrix3d& position_noise = fix.noise;
-      const Eigen::Vector3d& z_p = fix.position;
-      if (a.has_range_rate) {
-        Eigen::Matrix4d noise = Eigen::Matrix4d::Zero();
-        noise.topLeftCorner<3, 3>() = position_noise;
-        noise(3, 3) = kRangeRateSigma_mps * kRangeRateSigma_mps;
-        accepted = Update<4>(
-            [&](const Vector10d& x) {
-              const Eigen::Vector3d r = x.head<3>() - a.sensor_w;
-              const double range = std::max(r.norm(), 1e-3);
-              const Eigen::Vector3d los = r / range;
-              const Eigen::Vector3d v = x.segment<3>(3);
-              Eigen::Matrix<double, 4, 10> h = Eigen::Matrix<double, 4, 10>::Zero();
-              h.topLeftCorner<3, 3>().setIdentity();
-              h.block<1, 3>(3, 0) = ((v - los.dot(v) * los) / range).transpose();  // d(los . v)/dp
-              h.block<1, 3>(3, 3) = los.transpose();
-              Eigen::Vector4d innovation;
-              innovation << z_p - x.head<3>(), a.range_rate_mps - los.dot(v);
-              return std::pair{innovation, h};
-            },
-            noise);
-      } else {
-        accepted = Update<3>(position(z_p), position_noise);
-      }
-    }
+    const bool accepted = UpdateRanging(m, a);
     if (m == Modality::kLidar) lidar_rejections_ = accepted ? 0 : lidar_rejections_ + 1;
     if (accepted) {
       last_ranging_s_ = t_s_;
@@ -309,6 +252,69 @@ void AnchorFilter::Observe(Modality m, const GeometricAnchor& a) {
     }
     ++rejections_;
   }
+  MaybeRestart(m, a, live);
+}
+
+void AnchorFilter::ObserveRay(const GeometricAnchor& a) {
+  ray_ = a;
+  if (!started_) return;
+  PredictTo(a.t_s);
+  // An orthonormal pair normal to the ray.
+  const Eigen::Vector3d& d = a.direction_w;
+  const Eigen::Vector3d e1 = d.unitOrthogonal();
+  const Eigen::Vector3d e2 = d.cross(e1);
+  const double rho = std::max(1.0, (x_.head<3>() - a.origin_w).dot(d));
+  const double var = std::pow(rho * kRaySigma_rad, 2) + kRayFloor_m * kRayFloor_m;
+  Update<2>(
+      [&](const Vector10d& x) {
+        const Eigen::Vector3d r = x.head<3>() - a.origin_w;
+        Eigen::Matrix<double, 2, 10> h = Eigen::Matrix<double, 2, 10>::Zero();
+        h.block<1, 3>(0, 0) = e1.transpose();
+        h.block<1, 3>(1, 0) = e2.transpose();
+        return std::pair{Eigen::Vector2d(-e1.dot(r), -e2.dot(r)), h};
+      },
+      Eigen::Matrix2d(var * Eigen::Matrix2d::Identity()));
+}
+
+bool AnchorFilter::UpdateRanging(Modality m, const GeometricAnchor& a) {
+  // A position measurement z_p: innovation z_p - p, Jacobian [I 0].
+  const auto position = [](const Eigen::Vector3d& z_p) {
+    return [z_p](const Vector10d& x) {
+      Eigen::Matrix<double, 3, 10> h = Eigen::Matrix<double, 3, 10>::Zero();
+      h.leftCols<3>().setIdentity();
+      return std::pair{Eigen::Vector3d(z_p - x.head<3>()), h};
+    };
+  };
+  if (m == Modality::kLidar)
+    return Update<3>(position(a.origin_w),
+                     Eigen::Matrix3d(kLidarSigma_m * kLidarSigma_m * Eigen::Matrix3d::Identity()));
+  // The cluster's position (RadarFixOf) and its radial velocity (u . v at
+  // the predicted position).
+  const RadarFix fix = RadarFixOf(a);
+  const Eigen::Matrix3d& position_noise = fix.noise;
+  const Eigen::Vector3d& z_p = fix.position;
+  if (!a.has_range_rate) return Update<3>(position(z_p), position_noise);
+  Eigen::Matrix4d noise = Eigen::Matrix4d::Zero();
+  noise.topLeftCorner<3, 3>() = position_noise;
+  noise(3, 3) = kRangeRateSigma_mps * kRangeRateSigma_mps;
+  return Update<4>(
+      [&](const Vector10d& x) {
+        const Eigen::Vector3d r = x.head<3>() - a.sensor_w;
+        const double range = std::max(r.norm(), 1e-3);
+        const Eigen::Vector3d los = r / range;
+        const Eigen::Vector3d v = x.segment<3>(3);
+        Eigen::Matrix<double, 4, 10> h = Eigen::Matrix<double, 4, 10>::Zero();
+        h.topLeftCorner<3, 3>().setIdentity();
+        h.block<1, 3>(3, 0) = ((v - los.dot(v) * los) / range).transpose();  // d(los . v)/dp
+        h.block<1, 3>(3, 3) = los.transpose();
+        Eigen::Vector4d innovation;
+        innovation << z_p - x.head<3>(), a.range_rate_mps - los.dot(v);
+        return std::pair{innovation, h};
+      },
+      noise);
+}
+
+void AnchorFilter::MaybeRestart(Modality m, const GeometricAnchor& a, bool live) {
   // A (re)start at a ranging fix that agrees with the ray: a LiDAR fix the
   // track rejected means the track is wrong. A radar's cluster is often
   // something else on the same line of sight, and a static one confirms

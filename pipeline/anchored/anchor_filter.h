@@ -139,6 +139,14 @@ class AnchorFilter {
   using Imm10 = Imm<10>;  // x = [p, v, a, omega]
 
   void PredictTo(double t_s);
+  // A camera ray: held, and an update normal to it when a track runs.
+  void ObserveRay(const GeometricAnchor& a);
+  // A LiDAR or radar fix as an update of the running track (predicted to
+  // its time); returns whether the gate accepted it.
+  bool UpdateRanging(Modality m, const GeometricAnchor& a);
+  // A (re)start at a ranging fix that agrees with the ray, when no live,
+  // trusted track runs (or a radar fix to confirm).
+  void MaybeRestart(Modality m, const GeometricAnchor& a, bool live);
   // Mixes the modes' estimates into the one the filter reports.
   void Combine();
   // A linear(ised) update with gating on the mixture: `measure(x)` gives

@@ -17,19 +17,6 @@ AnchorTracker::AnchorTracker(double window_s, const Eigen::Vector3d& centre_m, d
 
 void AnchorTracker::Reset() { held_ = {}, gated_ = {}, filter_.Reset(); }
 
-namespace {
-
-// A held point's position and range at t_end: carried forward at the rate of
-// its last two fixes when they give a plausible one (`moving`), else as last
-// seen.
-struct CarriedPoint {
-  Eigen::Vector3d p = Eigen::Vector3d::Zero();
-  double range_m = 0.0;
-  bool moving = false;
-};
-
-}  // namespace
-
 void AnchorTracker::Held::Take(std::int64_t k, const GeometricAnchor& a) {
   if (window) previous = anchor;
   window = k;
@@ -47,14 +34,32 @@ AnchorWindow AnchorTracker::Update(std::int64_t k,
 AnchorWindow AnchorTracker::Update(std::int64_t k, const WindowAnchors& all) {
   // The filter: every anchor in capture order (the camera first at a tie).
   filter_.ObserveWindow(all);
+  TakeArrivals(k, all);
+  const double t_end = static_cast<double>(k) * window_s_;
+  AnchorWindow w;
+  Moving moving{}, gated_moving{};
+  WriteCandidates(t_end, w, moving, gated_moving);
+  int f = 0;
+  for (int i = 0; i < kFilterCandidate; ++i) {
+    w.features[static_cast<std::size_t>(f++)] = w.valid[static_cast<std::size_t>(i)];
+    for (int c = 0; c < 3; ++c)
+      w.features[static_cast<std::size_t>(f++)] =
+          static_cast<float>(w.candidates[static_cast<std::size_t>(i)][c]);
+  }
+  f = WriteHeldFeatures(k, t_end, moving, gated_moving, w, f);
+  f = WriteTrackFeatures(t_end, w, f);
+  if (f != kAnchorFeatures)
+    throw std::logic_error("AnchorTracker: wrote " + std::to_string(f) + " features");
+  return w;
+}
+
+void AnchorTracker::TakeArrivals(std::int64_t k, const WindowAnchors& all) {
   std::array<GeometricAnchor, kModalityCount> arrived;
   for (std::size_t m = 0; m < all.size(); ++m)
     for (const GeometricAnchor& a : all[m])
       if (a.kind != GeometricAnchor::Kind::kNone &&
           (arrived[m].kind == GeometricAnchor::Kind::kNone || a.t_s >= arrived[m].t_s))
         arrived[m] = a;
-
-  const double t_end = static_cast<double>(k) * window_s_;
   // The camera first: this window's ray gates this window's points.
   const auto camera_index = static_cast<std::size_t>(Modality::kCamera);
   if (arrived[camera_index].kind != GeometricAnchor::Kind::kNone)
@@ -67,28 +72,52 @@ AnchorWindow AnchorTracker::Update(std::int64_t k, const WindowAnchors& all) {
     if (camera.window && AnchorAgreesWithRay(m, a, camera.anchor))
       gated_[static_cast<std::size_t>(m) - 1].Take(k, a);
   }
+}
 
+// Anchors older than kMaxAge_s give no candidates.
+bool AnchorTracker::Usable(const Held& h, double t_end) const {
+  return h.window.has_value() && t_end - h.anchor.t_s <= kMaxAge_s;
+}
+
+double AnchorTracker::Age(const Held& h, double t_end) const {
+  return h.window ? std::max(0.0, t_end - h.anchor.t_s) : kMaxAge_s;
+}
+
+Eigen::Vector3d AnchorTracker::Normalised(const Eigen::Vector3d& p) const {
+  return (p - centre_m_) / scale_m_;
+}
+
+void AnchorTracker::SetCandidate(AnchorWindow& w, int i, bool valid,
+                                 const Eigen::Vector3d& p_w) const {
+  w.valid[static_cast<std::size_t>(i)] = valid ? 1.0f : 0.0f;
+  w.candidates[static_cast<std::size_t>(i)] = valid ? Normalised(p_w) : Eigen::Vector3d::Zero();
+}
+
+AnchorTracker::CarriedPoint AnchorTracker::Carry(const Held& h, double t_end, double max_carry_s) {
+  CarriedPoint c{h.anchor.origin_w, h.anchor.range_m, false};
+  if (!h.window || !h.previous) return c;
+  const double dt = h.anchor.t_s - h.previous->t_s;
+  const Eigen::Vector3d v = (h.anchor.origin_w - h.previous->origin_w) / dt;
+  const double range_rate = (h.anchor.range_m - h.previous->range_m) / dt;
+  c.moving = dt >= kMinFixGap_s && dt <= kMaxFixGap_s && v.norm() <= kMaxSpeed_mps &&
+             std::abs(range_rate) <= kMaxSpeed_mps;
+  if (c.moving) {
+    const double age = std::clamp(t_end - h.anchor.t_s, 0.0, max_carry_s);
+    c.p += v * age;
+    c.range_m += range_rate * age;
+  }
+  return c;
+}
+
+void AnchorTracker::WriteCandidates(double t_end, AnchorWindow& w, Moving& moving,
+                                    Moving& gated_moving) const {
   const Held& camera = held_[static_cast<int>(Modality::kCamera)];
   const Held& lidar = held_[static_cast<int>(Modality::kLidar)];
   const Held& radar = held_[static_cast<int>(Modality::kRadar)];
-  // Anchors older than kMaxAge_s give no candidates.
-  const auto usable = [&](const Held& h) {
-    return h.window.has_value() && t_end - h.anchor.t_s <= kMaxAge_s;
-  };
-  const bool ray = usable(camera);
-  const auto normalised = [&](const Eigen::Vector3d& p) -> Eigen::Vector3d {
-    return (p - centre_m_) / scale_m_;
-  };
-
-  AnchorWindow w;
-  int f = 0;
-  const auto candidate = [&](int i, bool valid, const Eigen::Vector3d& p_w) {
-    w.valid[static_cast<std::size_t>(i)] = valid ? 1.0f : 0.0f;
-    w.candidates[static_cast<std::size_t>(i)] = valid ? normalised(p_w) : Eigen::Vector3d::Zero();
-  };
+  const bool ray = Usable(camera, t_end);
   const GeometricAnchor& r = camera.anchor;
   if (ray) {
-    const Eigen::Vector3d o = normalised(r.origin_w);
+    const Eigen::Vector3d o = Normalised(r.origin_w);
     w.ray = {1.0f,
              static_cast<float>(o.x()),
              static_cast<float>(o.y()),
@@ -97,49 +126,34 @@ AnchorWindow AnchorTracker::Update(std::int64_t k, const WindowAnchors& all) {
              static_cast<float>(r.direction_w.y()),
              static_cast<float>(r.direction_w.z())};
   }
-  const auto carried = [&](const Held& h, double max_carry_s) {
-    CarriedPoint c{h.anchor.origin_w, h.anchor.range_m, false};
-    if (!h.window || !h.previous) return c;
-    const double dt = h.anchor.t_s - h.previous->t_s;
-    const Eigen::Vector3d v = (h.anchor.origin_w - h.previous->origin_w) / dt;
-    const double range_rate = (h.anchor.range_m - h.previous->range_m) / dt;
-    c.moving = dt >= kMinFixGap_s && dt <= kMaxFixGap_s && v.norm() <= kMaxSpeed_mps &&
-               std::abs(range_rate) <= kMaxSpeed_mps;
-    if (c.moving) {
-      const double age = std::clamp(t_end - h.anchor.t_s, 0.0, max_carry_s);
-      c.p += v * age;
-      c.range_m += range_rate * age;
-    }
-    return c;
-  };
   // Each ranging sensor's point as held, and its fixes consistent with the
   // camera's ray on (or at the range of) the held ray.
-  std::array<bool, 2> moving{}, gated_moving{};
   for (const auto& [j, h] : {std::pair{0, &lidar}, std::pair{1, &radar}}) {
-    const CarriedPoint c = carried(*h, kMaxCarry_s);
+    const CarriedPoint c = Carry(*h, t_end, kMaxCarry_s);
     moving[static_cast<std::size_t>(j)] = c.moving;
-    candidate(j, usable(*h), c.p);
+    SetCandidate(w, j, Usable(*h, t_end), c.p);
     const Held& g = gated_[static_cast<std::size_t>(j)];
-    const CarriedPoint cg = carried(g, kMaxCarryOnRay_s);
+    const CarriedPoint cg = Carry(g, t_end, kMaxCarryOnRay_s);
     gated_moving[static_cast<std::size_t>(j)] = cg.moving;
-    const bool valid = usable(g) && ray;
-    candidate(2 + j, valid, ProjectOntoRay(cg.p, r.origin_w, r.direction_w));
-    candidate(4 + j, valid,
-              RangeOnRay(g.anchor.sensor_w, cg.range_m, cg.p, r.origin_w, r.direction_w));
+    const bool valid = Usable(g, t_end) && ray;
+    SetCandidate(w, 2 + j, valid, ProjectOntoRay(cg.p, r.origin_w, r.direction_w));
+    SetCandidate(w, 4 + j, valid,
+                 RangeOnRay(g.anchor.sensor_w, cg.range_m, cg.p, r.origin_w, r.direction_w));
   }
-  for (int i = 0; i < kFilterCandidate; ++i) {
-    w.features[static_cast<std::size_t>(f++)] = w.valid[static_cast<std::size_t>(i)];
-    for (int c = 0; c < 3; ++c)
-      w.features[static_cast<std::size_t>(f++)] =
-          static_cast<float>(w.candidates[static_cast<std::size_t>(i)][c]);
-  }
+}
+
+int AnchorTracker::WriteHeldFeatures(std::int64_t k, double t_end, const Moving& moving,
+                                     const Moving& gated_moving, AnchorWindow& w, int f) const {
+  const Held& camera = held_[static_cast<int>(Modality::kCamera)];
+  const Held& lidar = held_[static_cast<int>(Modality::kLidar)];
+  const Held& radar = held_[static_cast<int>(Modality::kRadar)];
+  const bool ray = Usable(camera, t_end);
+  const GeometricAnchor& r = camera.anchor;
   // Capture to the end of window k, the time the estimate is for.
-  const auto age = [&](const Held& h) {
-    return h.window ? std::max(0.0, t_end - h.anchor.t_s) : kMaxAge_s;
-  };
   for (double unit : {kMaxAge_s, kFineAge_s})
     for (const Held& h : held_)
-      w.features[static_cast<std::size_t>(f++)] = static_cast<float>(std::min(age(h) / unit, 1.0));
+      w.features[static_cast<std::size_t>(f++)] =
+          static_cast<float>(std::min(Age(h, t_end) / unit, 1.0));
   for (const Held& h : held_)
     w.features[static_cast<std::size_t>(f++)] = h.window && *h.window == k ? 1.0f : 0.0f;
   for (bool m : moving) w.features[static_cast<std::size_t>(f++)] = m ? 1.0f : 0.0f;
@@ -158,12 +172,16 @@ AnchorWindow AnchorTracker::Update(std::int64_t k, const WindowAnchors& all) {
     w.features[static_cast<std::size_t>(f++)] = ray ? static_cast<float>(r.direction_w[c]) : 0.0f;
   for (double unit : {kMaxAge_s, kFineAge_s})
     for (const Held& h : gated_)
-      w.features[static_cast<std::size_t>(f++)] = static_cast<float>(std::min(age(h) / unit, 1.0));
+      w.features[static_cast<std::size_t>(f++)] =
+          static_cast<float>(std::min(Age(h, t_end) / unit, 1.0));
   for (bool m : gated_moving) w.features[static_cast<std::size_t>(f++)] = m ? 1.0f : 0.0f;
-  // The filter's track.
+  return f;
+}
+
+int AnchorTracker::WriteTrackFeatures(double t_end, AnchorWindow& w, int f) const {
   const std::optional<AnchorFilter::Estimate> track = filter_.PredictAt(t_end);
-  candidate(kFilterCandidate, track.has_value(),
-            track ? track->position_m : Eigen::Vector3d::Zero());
+  SetCandidate(w, kFilterCandidate, track.has_value(),
+               track ? track->position_m : Eigen::Vector3d::Zero());
   w.features[static_cast<std::size_t>(f++)] = track ? 1.0f : 0.0f;
   for (int c = 0; c < 3; ++c)
     w.features[static_cast<std::size_t>(f++)] =
@@ -173,9 +191,7 @@ AnchorWindow AnchorTracker::Update(std::int64_t k, const WindowAnchors& all) {
   for (double unit : {kMaxAge_s, kFineAge_s})
     w.features[static_cast<std::size_t>(f++)] =
         track ? static_cast<float>(std::min(track->ranging_age_s / unit, 1.0)) : 1.0f;
-  if (f != kAnchorFeatures)
-    throw std::logic_error("AnchorTracker: wrote " + std::to_string(f) + " features");
-  return w;
+  return f;
 }
 
 std::array<Eigen::Vector3d, kAnchorCandidates> MedianCandidateOffsets(

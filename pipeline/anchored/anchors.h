@@ -119,6 +119,33 @@ class AnchorTracker {
     std::optional<GeometricAnchor> previous;  // the update before
     void Take(std::int64_t k, const GeometricAnchor& a);
   };
+  // A held point's position and range at t_end: carried forward at the rate
+  // of its last two fixes when they give a plausible one (`moving`), else as
+  // last seen.
+  struct CarriedPoint {
+    Eigen::Vector3d p = Eigen::Vector3d::Zero();
+    double range_m = 0.0;
+    bool moving = false;
+  };
+  // Whether each ranging sensor's (LiDAR, radar) held point is carried as moving.
+  using Moving = std::array<bool, 2>;
+
+  // Each modality's latest anchor of window k held; the LiDAR's and the
+  // radar's also as gated when they agree with the camera's held ray.
+  void TakeArrivals(std::int64_t k, const WindowAnchors& all);
+  // The ray and the candidates from the held points (all but the filter's).
+  void WriteCandidates(double t_end, AnchorWindow& w, Moving& moving, Moving& gated_moving) const;
+  // The features of the held and gated points from index f; returns the next index.
+  int WriteHeldFeatures(std::int64_t k, double t_end, const Moving& moving,
+                        const Moving& gated_moving, AnchorWindow& w, int f) const;
+  // The filter's candidate and features from index f; returns the next index.
+  int WriteTrackFeatures(double t_end, AnchorWindow& w, int f) const;
+  bool Usable(const Held& h, double t_end) const;
+  // Capture to t_end, kMaxAge_s for a point never held.
+  double Age(const Held& h, double t_end) const;
+  Eigen::Vector3d Normalised(const Eigen::Vector3d& p) const;
+  void SetCandidate(AnchorWindow& w, int i, bool valid, const Eigen::Vector3d& p_w) const;
+  static CarriedPoint Carry(const Held& h, double t_end, double max_carry_s);
 
   double window_s_;
   Eigen::Vector3d centre_m_;

@@ -19,16 +19,6 @@ constexpr int kCrop = CameraObservation::kCropPx;
 // a pixel, the fraction of the pixel the target covers is not observable.
 constexpr double kMinContrast = 8.0;
 
-// Optical frame C in the body frame B (REP 103), as sensors/fisheye_stereo.cpp
-// builds it: z_C = x_B, x_C = -y_B, y_C = -z_B (columns: C's axes in B).
-Eigen::Matrix3d R_BC() {
-  Eigen::Matrix3d R;
-  R << 0, 0, 1,  //
-      -1, 0, 0,  //
-      0, -1, 0;
-  return R;
-}
-
 // A read-only OpenCV view of an 8-bit image (no copy).
 cv::Mat View(const sensors::GrayImage& image) {
   return cv::Mat(image.height, image.width, CV_8UC1,
@@ -400,7 +390,7 @@ CameraPreprocessor::CameraPreprocessor(const sensors::FisheyeStereoConfig& camer
       m.config.rectified_focal_px ? *m.config.rectified_focal_px : camera.fx_px / (1.0 + camera.xi);
   m.principal_px = Eigen::Vector2d(0.5 * (m.width_px - 1), 0.5 * (m.height_px - 1));
   m.X_WC[0] = camera.pose.ToIsometry();
-  m.X_WC[0].linear() = m.X_WC[0].linear() * R_BC();
+  m.X_WC[0].linear() = m.X_WC[0].linear() * sensors::R_BC();
   m.X_WC[1] = m.X_WC[0] * Eigen::Translation3d(camera.baseline_m, 0.0, 0.0);
   m.BuildMaps();
   const int k = m.config.morphology_kernel_px;

@@ -11,6 +11,9 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "core/json_io.h"
+#include "core/physical_constants.h"
+#include "core/progress.h"
 #include "pipeline/edge/te_align.h"
 #include "pipeline/edge/uavloc_model.h"
 #include "pipeline/model_checksums.h"
@@ -18,8 +21,6 @@
 #include "pipeline/node/ib_model_io.h"
 #include "pipeline/node/ib_normalization.h"
 #include "pipeline/variants.h"
-#include "core/json_io.h"
-#include "core/progress.h"
 
 namespace uavsim::pipeline {
 namespace {
@@ -162,7 +163,7 @@ bool ShowsTarget(const Sample& s, const TrainOptions& o) {
     const Eigen::Vector3d to_truth = (s.truth_m - s.camera->eye_left_w).normalized();
     const double cos_angle =
         std::clamp(to_truth.dot(s.camera->bearing_left_w.normalized()), -1.0, 1.0);
-    return std::acos(cos_angle) <= o.stage1_label_gate_deg * M_PI / 180.0;
+    return std::acos(cos_angle) <= o.stage1_label_gate_deg * core::kPi / 180.0;
   }
   if (!s.points || !(o.stage1_label_gate_m > 0)) return true;
   const PointObservation& p = *s.points;
@@ -864,12 +865,8 @@ void WriteTestEstimates(const TrainReport& r, const std::string& path) {
   if (!out) throw std::runtime_error(path + ": cannot write");
 }
 
-}  // namespace
-
-TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& o, const ModelManifest& manifest,
-                        const std::string& out_dir) {
-  o.Validate();
-  const StopScope stop(o.check_stop);
+// Each episode's window is the training's.
+void CheckEpisodes(const Dataset& data, const TrainOptions& o) {
   if (data.train.empty() || data.validation.empty())
     throw std::invalid_argument("train: need at least one training and one validation episode");
   for (const auto* part : {&data.train, &data.validation, &data.test})
@@ -878,31 +875,10 @@ TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& o, const ModelM
         throw std::invalid_argument("train: episode \"" + e.label + "\" has " +
                                     core::FormatNumber(e.window_s) + " s windows, training " +
                                     core::FormatNumber(o.window_s) + " s");
-  torch::manual_seed(o.seed);
-  std::vector<IbCcModel> encoders;
-  std::optional<TrainingConfig> encoders_trained_with;
-  if (!o.encoders_from.empty())
-    encoders = LoadEncoders(o.encoders_from, o.latent_dim, &encoders_trained_with);
-  std::vector<Eigen::Vector3d> positions;
-  for (const Episode& e : data.train)
-    positions.insert(positions.end(), e.window_truth.begin(), e.window_truth.end());
-  const IbNormalization norm = encoders.empty() ? FitPositionNormalization(positions)
-                                                : encoders.front()->config().normalization;
+}
 
-  const fs::path out(out_dir);
-  const fs::path checkpoints = out / "checkpoints";
-  fs::create_directories(checkpoints);
-  TrainReport report;
-  report.split = data.split;
-  report.encoders_from = o.encoders_from;
-  for (int m = 0; encoders.size() < kModalityCount; ++m) {
-    StageReport stage;
-    encoders.push_back(TrainEncoder(static_cast<Modality>(m), data, o, norm,
-                                    (checkpoints / (std::string(kPartNames[m]) + ".json")).string(),
-                                    stage));
-    report.stages.push_back(stage);
-  }
-
+// The edge network's configuration (both heads') from the training options.
+UavLocModelConfig EdgeConfigOf(const TrainOptions& o, const IbNormalization& norm) {
   UavLocModelConfig config;
   config.latent_dim = o.latent_dim;
   config.window_s = o.window_s;
@@ -917,48 +893,47 @@ TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& o, const ModelM
   config.mica = o.mica;
   config.position_centre_m = norm.centre_m;
   config.position_scale_m = norm.scale_m;
-  const TeAlign align(config.te_align());
-  // Stage 1 only (no head asked for): no sequences to train on.
-  const bool stage2 = o.paper_head || o.anchored_head;
-  const std::vector<WindowSequence> train =
-      stage2 ? AlignAll(data.train, encoders, align, norm) : std::vector<WindowSequence>{};
-  const std::vector<WindowSequence> val =
-      stage2 ? AlignAll(data.validation, encoders, align, norm) : std::vector<WindowSequence>{};
-  const std::vector<WindowSequence> test = data.test.empty()
-                                               ? std::vector<WindowSequence>{}
-                                               : AlignAll(data.test, encoders, align, norm);
+  return config;
+}
 
-  // The test episodes by weather (AlignAll keeps the episodes with windows,
-  // in order), and the classical methods on them.
-  // (Copies share the samples: SampleList.)
-  std::map<std::string, std::vector<std::size_t>> test_weather;
-  std::map<std::string, std::vector<Episode>> test_weather_episodes;
-  std::vector<Episode> test_episodes;  // test[i] is test_episodes[i]'s
+// The test episodes by weather (AlignAll keeps the episodes with windows,
+// in order: test[i] is episodes[i]'s). Copies share the samples (SampleList).
+struct TestParts {
+  std::map<std::string, std::vector<std::size_t>> by_weather;  // weather -> indices
+  std::map<std::string, std::vector<Episode>> episodes_by_weather;
+  std::vector<Episode> episodes;
+};
+
+TestParts TestPartsOf(const Dataset& data) {
+  TestParts t;
   for (const Episode& e : data.test)
     if (!e.window_truth.empty()) {
-      test_weather[WeatherOf(e)].push_back(test_episodes.size());
-      test_weather_episodes[WeatherOf(e)].push_back(e);
-      test_episodes.push_back(e);
+      t.by_weather[WeatherOf(e)].push_back(t.episodes.size());
+      t.episodes_by_weather[WeatherOf(e)].push_back(e);
+      t.episodes.push_back(e);
     }
-  for (const auto& [weather, episodes] : test_weather_episodes)
-    report.test_weather_episodes[weather] = episodes.size();
-  if (o.score_classical && !test.empty()) {
-    for (auto& [method, ev] : o.score_classical(test_episodes)) report.test[method] = std::move(ev);
-    for (const auto& [weather, episodes] : test_weather_episodes)
-      for (auto& [method, ev] : o.score_classical(episodes))
-        report.test_by_weather[method][weather] = std::move(ev);
-  }
+  return t;
+}
 
-  ModelManifest m = manifest;
-  m.latent_dim = o.latent_dim;
-  m.window_s = o.window_s;
-  m.training = static_cast<const TrainingConfig&>(o);
-  // Stage 1 as the reused encoders were trained.
-  if (encoders_trained_with) CopyStage1Keys(*encoders_trained_with, *m.training);
-  m.edge = o.paper_head ? "uavloc.pt" : "";
-  m.anchored_edge = o.anchored_head ? "uavloc_anchored.pt" : "";
-  // Each head from the generator state stage 1 left (trained alone or
-  // beside the other, the same head).
+// The classical methods on the test episodes, all and by weather.
+void ScoreClassical(const TrainOptions& o, const TestParts& t, bool have_test,
+                    TrainReport& report) {
+  for (const auto& [weather, episodes] : t.episodes_by_weather)
+    report.test_weather_episodes[weather] = episodes.size();
+  if (!o.score_classical || !have_test) return;
+  for (auto& [method, ev] : o.score_classical(t.episodes)) report.test[method] = std::move(ev);
+  for (const auto& [weather, episodes] : t.episodes_by_weather)
+    for (auto& [method, ev] : o.score_classical(episodes))
+      report.test_by_weather[method][weather] = std::move(ev);
+}
+
+// Stage 2: each edge head asked for, from the generator state stage 1 left
+// (trained alone or beside the other, the same head), scored on the test
+// windows and saved into `out`.
+void TrainHeads(const std::vector<WindowSequence>& train, const std::vector<WindowSequence>& val,
+                const std::vector<WindowSequence>& test, const TestParts& parts,
+                const UavLocModelConfig& config, const TrainOptions& o, const ModelManifest& m,
+                const fs::path& out, TrainReport& report) {
   at::Generator generator = at::detail::getDefaultCPUGenerator();
   const torch::Tensor generator_state = generator.get_state();
   for (const bool anchored : {false, true}) {
@@ -972,12 +947,13 @@ TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& o, const ModelM
     }
     const std::string& file = anchored ? m.anchored_edge : m.edge;
     StageReport stage;
-    UavLocModel model = TrainFusion(train, val, head, o, (checkpoints / file).string(), stage);
+    UavLocModel model =
+        TrainFusion(train, val, head, o, (out / "checkpoints" / file).string(), stage);
     report.stages.push_back(stage);
     if (!test.empty()) {
       const std::string method = anchored ? "uavloc_anchored" : o.method;
       report.test[method] = Evaluate(model, test);
-      for (const auto& [weather, indices] : test_weather) {
+      for (const auto& [weather, indices] : parts.by_weather) {
         std::vector<WindowSequence> part;
         for (std::size_t i : indices) part.push_back(test[i]);
         report.test_by_weather[method][weather] = Evaluate(model, part);
@@ -985,7 +961,13 @@ TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& o, const ModelM
     }
     SaveUavLocModel(model, (out / file).string());
   }
+}
 
+// The information limit and the comparisons on common windows (issue 41):
+// each decoder alone, the observations holding the target, every method on
+// the windows all of them answered.
+void ScoreDiagnostics(const Dataset& data, std::vector<IbCcModel>& encoders, const TeAlign& align,
+                      TrainReport& report) {
   if (!data.test.empty()) report.test_decoder = DecoderScores(encoders, data.test, align);
   if (!data.validation.empty())
     report.validation_decoder = DecoderScores(encoders, data.validation, align);
@@ -997,21 +979,28 @@ TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& o, const ModelM
         ++c.sent;
         c.holding_target += ObservationHoldsTarget(smp);
       }
-  WriteTestEstimates(report, (out / "test_estimates.csv").string());
-  report.test_common = OnCommonWindows(report.test);
-  {
-    std::map<std::string, std::map<std::string, Evaluation>> by_weather;  // weather -> method
-    for (const auto& [method, weathers] : report.test_by_weather)
-      for (const auto& [weather, ev] : weathers) by_weather[weather][method] = ev;
-    for (const auto& [weather, methods] : by_weather)
-      for (auto& [method, ev] : OnCommonWindows(methods))
-        report.test_by_weather_common[method][weather] = std::move(ev);
-  }
+}
 
+// Every method on the windows all of them answered, all and by weather.
+void ScoreOnCommonWindows(TrainReport& report) {
+  report.test_common = OnCommonWindows(report.test);
+  std::map<std::string, std::map<std::string, Evaluation>> by_weather;  // weather -> method
+  for (const auto& [method, weathers] : report.test_by_weather)
+    for (const auto& [weather, ev] : weathers) by_weather[weather][method] = ev;
+  for (const auto& [weather, methods] : by_weather)
+    for (auto& [method, ev] : OnCommonWindows(methods))
+      report.test_by_weather_common[method][weather] = std::move(ev);
+}
+
+// The encoders, training_report.json, model.json and, last, the checksums
+// over every file of the folder.
+void WriteModelFolder(const fs::path& out, const ModelManifest& m,
+                      const std::vector<IbCcModel>& encoders, const TrainReport& report,
+                      const TrainOptions& o) {
   const std::string* names[kModalityCount] = {&m.camera, &m.lidar, &m.radar};
   for (int i = 0; i < kModalityCount; ++i)
     SaveIbCcModel(encoders[static_cast<std::size_t>(i)], (out / *names[i]).string(), m.note);
-  fs::remove_all(checkpoints);
+  fs::remove_all(out / "checkpoints");
   {
     const std::string text = ReportJson(report, o);
     const fs::path p = out / "training_report.json";
@@ -1021,6 +1010,73 @@ TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& o, const ModelM
   }
   WriteModelManifest(m, (out / "model.json").string());
   WriteModelChecksums(out.string());  // last: over every file of the folder
+}
+
+// Stage 1: the encoders not reused, trained modality by modality.
+void TrainEncoders(const Dataset& data, const TrainOptions& o, const IbNormalization& norm,
+                   const fs::path& checkpoints, std::vector<IbCcModel>& encoders,
+                   TrainReport& report) {
+  for (int m = 0; encoders.size() < kModalityCount; ++m) {
+    StageReport stage;
+    encoders.push_back(TrainEncoder(static_cast<Modality>(m), data, o, norm,
+                                    (checkpoints / (std::string(kPartNames[m]) + ".json")).string(),
+                                    stage));
+    report.stages.push_back(stage);
+  }
+}
+
+}  // namespace
+
+TrainReport TrainUavLoc(const Dataset& data, const TrainOptions& o, const ModelManifest& manifest,
+                        const std::string& out_dir) {
+  o.Validate();
+  const StopScope stop(o.check_stop);
+  CheckEpisodes(data, o);
+  torch::manual_seed(o.seed);
+  std::vector<IbCcModel> encoders;
+  std::optional<TrainingConfig> encoders_trained_with;
+  if (!o.encoders_from.empty())
+    encoders = LoadEncoders(o.encoders_from, o.latent_dim, &encoders_trained_with);
+  std::vector<Eigen::Vector3d> positions;
+  for (const Episode& e : data.train)
+    positions.insert(positions.end(), e.window_truth.begin(), e.window_truth.end());
+  const IbNormalization norm = encoders.empty() ? FitPositionNormalization(positions)
+                                                : encoders.front()->config().normalization;
+
+  const fs::path out(out_dir);
+  fs::create_directories(out / "checkpoints");
+  TrainReport report;
+  report.split = data.split;
+  report.encoders_from = o.encoders_from;
+  TrainEncoders(data, o, norm, out / "checkpoints", encoders, report);
+
+  const UavLocModelConfig config = EdgeConfigOf(o, norm);
+  const TeAlign align(config.te_align());
+  // Stage 1 only (no head asked for): no sequences to train on.
+  const bool stage2 = o.paper_head || o.anchored_head;
+  const std::vector<WindowSequence> train =
+      stage2 ? AlignAll(data.train, encoders, align, norm) : std::vector<WindowSequence>{};
+  const std::vector<WindowSequence> val =
+      stage2 ? AlignAll(data.validation, encoders, align, norm) : std::vector<WindowSequence>{};
+  const std::vector<WindowSequence> test = data.test.empty()
+                                               ? std::vector<WindowSequence>{}
+                                               : AlignAll(data.test, encoders, align, norm);
+  const TestParts parts = TestPartsOf(data);
+  ScoreClassical(o, parts, !test.empty(), report);
+
+  ModelManifest m = manifest;
+  m.latent_dim = o.latent_dim;
+  m.window_s = o.window_s;
+  m.training = static_cast<const TrainingConfig&>(o);
+  // Stage 1 as the reused encoders were trained.
+  if (encoders_trained_with) CopyStage1Keys(*encoders_trained_with, *m.training);
+  m.edge = o.paper_head ? "uavloc.pt" : "";
+  m.anchored_edge = o.anchored_head ? "uavloc_anchored.pt" : "";
+  TrainHeads(train, val, test, parts, config, o, m, out, report);
+  ScoreDiagnostics(data, encoders, align, report);
+  WriteTestEstimates(report, (out / "test_estimates.csv").string());
+  ScoreOnCommonWindows(report);
+  WriteModelFolder(out, m, encoders, report, o);
   return report;
 }
 

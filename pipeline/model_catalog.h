@@ -1,0 +1,111 @@
+// The model catalog: resolves the learned and TorchScript methods a
+// scenario lists to their model folders, manifests and files, checks them,
+// loads them and makes each method (localization_method.h). The one place
+// that knows where a method's weights live: `/pipeline/model` names the
+// scenario's model folder ("default": the one shipped for
+// scenarios/default.json, DefaultModelPath); a variant's method (gru,
+// no_mica, ...) runs the edge head of the folder beside it named
+// FOLDER-VARIANT (trained with `uavsim train --variant V --encoders
+// FOLDER`: the nodes' encoders are shared), or of the model itself when it
+// is that variant; a TorchScript method's file is its entry's "edge".
+// Relative paths resolve against the scenario's folder.
+//
+// Errors: core::ConfigError naming the scenario file and the JSON pointer of
+// what does not fit (/pipeline/model, /pipeline/latent_dim,
+// /pipeline/window_s, /pipeline/preprocess/raw, /pipeline/methods/i[/edge]).
+// Determinism: loading draws nothing; call pipeline::InitTorch first.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/json_io.h"
+#include "core/modality.h"
+#include "pipeline/localization_method.h"
+#include "pipeline/model_bundle.h"
+#include "pipeline/pipeline_config.h"
+
+namespace uavsim::pipeline {
+
+class NodeEncoder;
+
+// What of a scenario the catalog reads.
+struct CatalogScenario {
+  const PipelineConfig* pipeline = nullptr;
+  std::string base_dir;     // the scenario file's folder: relative paths start here
+  std::string file;         // the scenario file errors name
+  std::string layout_hash;  // the scenario's world and node layout (a model's "layout_hash")
+};
+
+// Whether the scenario runs a method that needs a trained model (uavloc and
+// its variants and subsets, uavloc_anchored, TorchScript methods: they run
+// on the model's latents).
+bool NeedsTrainedModel(const PipelineConfig& p);
+
+// Whether the nodes send geometric anchors with their latents: a method that
+// reads them runs (uavloc_anchored, anchor_track).
+bool SendsAnchors(const PipelineConfig& p);
+
+// The manifest path of a model folder given on a command line (`--model
+// DIR`, "default": the shipped one unless a folder of that name exists),
+// checked as CheckEncoderModel (sim/edge_server.h) says.
+std::string ResolveEncoderModel(const CatalogScenario& s, const std::string& dir,
+                                const std::string& command);
+
+class ModelCatalog {
+ public:
+  // Resolves and checks every model the scenario's methods run without
+  // loading weights: the model's manifest parses, its folder's checksums
+  // hold, it has each method's edge head, its latent size and window
+  // length are the scenario's, a raw-variant model meets raw
+  // pre-processing, and each variant's folder is that variant with the
+  // same encoders. Nothing when no method needs a model.
+  explicit ModelCatalog(CatalogScenario s);
+  ~ModelCatalog();
+  ModelCatalog(ModelCatalog&&) noexcept;
+
+  bool needs_model() const { return needs_model_; }
+  // Model folders without checksums.sha256 (older models): only loading
+  // them checks their files.
+  const std::vector<std::string>& unchecked() const { return unchecked_; }
+
+  // Loads the TorchScript methods' files and checks their signatures.
+  void LoadScripted();
+  // Loads everything the methods run: the model, the variants' models and
+  // the TorchScript files; warns on stderr (unless `quiet`) when the model
+  // was trained for another world or node layout.
+  void Load(bool quiet);
+
+  // The model's IB-CC encoder of modality m (null before Load or without a model).
+  const NodeEncoder* encoder(core::Modality m) const;
+  // metrics.json's "uavloc_model" (path, trained_for, same_layout, heads,
+  // extensions, temporal, variant, variants, scripted); null before Load or
+  // without a model.
+  const core::Json& info() const { return info_; }
+
+  // The learned or TorchScript method `name` with its own state (a learned
+  // one a fresh copy of its edge head; a TorchScript one its loaded file,
+  // handed over: once per name); null for a method of no model (ekf,
+  // anchor_track). After Load.
+  std::unique_ptr<LocalizationMethod> MakeMethod(const std::string& name);
+
+ private:
+  void ResolveModel();
+  void ResolveVariants();
+
+  CatalogScenario s_;
+  bool needs_model_ = false;
+  std::string model_path_;  // the scenario model's manifest
+  ModelManifest manifest_;
+  std::map<std::string, std::string> variant_paths_;  // variant -> manifest
+  std::vector<std::string> unchecked_;
+  std::unique_ptr<UavLocModelFiles> model_;
+  std::map<std::string, std::unique_ptr<UavLocModelFiles>> variant_models_;
+  std::map<std::string, std::unique_ptr<ScriptedEdge>> scripted_;
+  core::Json info_;
+};
+
+}  // namespace uavsim::pipeline
