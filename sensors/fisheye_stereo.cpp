@@ -58,16 +58,6 @@ double SkyRadiance(double direction_z) {
   return kSkyZenith + (kSkyHorizon - kSkyZenith) * s * s;
 }
 
-// Optical frame C in the body frame B (REP 103): z_C = x_B, x_C = -y_B,
-// y_C = -z_B; the columns are C's axes written in B.
-Eigen::Matrix3d R_BC() {
-  Eigen::Matrix3d R;
-  R << 0, 0, 1,  //
-      -1, 0, 0,  //
-      0, -1, 0;
-  return R;
-}
-
 }  // namespace
 
 struct FisheyeStereo::Light {

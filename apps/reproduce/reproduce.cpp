@@ -15,6 +15,7 @@
 
 #include "apps/reproduce/reproduce_report.h"
 #include "apps/sweep/process_farm.h"
+#include "apps/sweep/recorded_folder.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/file_lock.h"
@@ -99,35 +100,30 @@ void RemoveRemains(const std::string& dir) {
     if (e.path().extension() == ".partial") fs::remove_all(e.path(), ec);
 }
 
+// Creates DIR for the plan `record`, or checks that an existing DIR holds
+// the same plan (keys added to the record since it was written are added).
 void PrepareDir(const std::string& dir, const Json& record) {
   results::RemoveStaleStaging(dir);  // what killed commands left beside it, of any name
-  const fs::path file = fs::path(dir) / "reproduce.json";
-  std::error_code ec;
-  if (fs::is_regular_file(file, ec)) {
-    Json old;
-    try {
-      old = Json::parse(core::ReadFileBytes(file.string()));
-    } catch (const Json::exception& e) {
-      throw core::UsageError(file.string() + ": unreadable: " + e.what());
-    }
-    bool added = false;
-    for (const auto& [key, value] : record.items()) {
-      if (!old.contains(key) && AddedLater(key)) {
-        old[key] = value, added = true;
-        continue;
-      }
-      if (!old.contains(key) || old[key] != value)
-        throw core::UsageError("uavsim reproduce: " + dir + " holds a reproduction of another " +
-                               "plan (" + key + " " + (old.contains(key) ? old[key].dump() : "?") +
-                               ", now " + value.dump() + "): use another --out");
-    }
-    if (added) core::WriteFileAtomic(file.string(), old.dump(2) + "\n");
-    RemoveRemains(dir);
+  std::optional<Json> old = ReadFolderRecord(dir, "reproduce.json");
+  if (!old) {
+    CreateRecordedFolder(dir, "reproduce.json", record, {"models", "episodes"});
     return;
   }
-  fs::create_directories(fs::path(dir) / "models");
-  fs::create_directories(fs::path(dir) / "episodes");
-  core::WriteFileAtomic(file.string(), record.dump(2) + "\n");
+  bool added = false;
+  for (const auto& [key, value] : record.items()) {
+    if (!old->contains(key) && AddedLater(key)) {
+      (*old)[key] = value, added = true;
+      continue;
+    }
+    if (!old->contains(key) || (*old)[key] != value)
+      throw core::UsageError("uavsim reproduce: " + dir + " holds a reproduction of another " +
+                             "plan (" + key + " " +
+                             (old->contains(key) ? (*old)[key].dump() : "?") + ", now " +
+                             value.dump() + "): use another --out");
+  }
+  if (added)
+    core::WriteFileAtomic((fs::path(dir) / "reproduce.json").string(), old->dump(2) + "\n");
+  RemoveRemains(dir);
 }
 
 // The sets the arms train on, in plan order.

@@ -18,11 +18,12 @@
 #include <set>
 #include <sstream>
 
-#include "results/run_directory.h"
+#include "apps/sweep/process_farm.h"
+#include "apps/sweep/recorded_folder.h"
 #include "core/error.h"
 #include "core/file_lock.h"
 #include "core/progress.h"
-#include "apps/sweep/process_farm.h"
+#include "results/run_directory.h"
 #include "sim/run.h"
 
 namespace uavsim::sim {
@@ -108,27 +109,17 @@ bool PointDone(const std::string& dir, const std::string& id) {
 // holds the same sweep.
 void PrepareDir(const std::string& dir, const Json& record) {
   results::RemoveStaleStaging(dir);  // what killed commands left beside it, of any name
-  const fs::path file = fs::path(dir) / "sweep.json";
-  std::error_code ec;
-  if (fs::exists(file, ec)) {
-    Json old;
-    try {
-      old = Json::parse(core::ReadFileBytes(file.string()));
-    } catch (const Json::exception&) {
-      throw core::UsageError(file.string() + ": unreadable; remove " + dir +
-                             " or choose another --out");
-    }
-    if (old != record)
+  if (const std::optional<Json> old = ReadFolderRecord(dir, "sweep.json")) {
+    if (*old != record)
       throw core::UsageError(dir +
                              ": holds another sweep (its spec, base scenario or grid differ); "
                              "choose another --out or remove it");
     return;
   }
+  std::error_code ec;
   if (fs::exists(dir, ec) && !fs::is_empty(dir, ec))
     throw core::UsageError(dir + ": exists and is not a sweep; choose another --out");
-  fs::create_directories(fs::path(dir) / "points", ec);
-  if (ec) throw std::runtime_error(dir + ": cannot create folder: " + ec.message());
-  results::WriteFileAtomic(file.string(), record.dump(2) + "\n");
+  CreateRecordedFolder(dir, "sweep.json", record, {"points"});
 }
 
 // The lock of a sweep's folder, a shard's own (the shards of one grid run
