@@ -40,7 +40,7 @@ const char* kHelp =
     "  --out DIR      default runs/reproduce-NAME (-quick with --quick)\n"
     "  --seeds K      training seeds (default 3; quick 2); on an existing DIR only the\n"
     "                 seeds it lacks are trained\n"
-    "  --episodes N   flights per episode set (default 60; quick 6)\n"
+    "  --episodes N   flights per episode set (default 30; quick 6)\n"
     "  --set P=V      override the scenario's value at JSON pointer P\n"
     "  --wait         when another reproduction runs in DIR (its lock DIR/.lock), wait for\n"
     "                 it instead of refusing (exit 2, naming its process)\n"
@@ -92,9 +92,19 @@ std::string Help() { return kHelp; }
 }  // namespace
 
 Command ReproduceCommand() {
-  return {"reproduce", "reproduce [--scenario S]", "the paper's Sec. VI: every figure and table, with verdicts",
-          {{"--scenario", true}, {"--out", true}, {"--jobs", true}, {"--seeds", true}, {"--episodes", true}, {"--set", true}, {"--quick", false}, {"--wait", false}},
-          Help, Reproduce};
+  return {"reproduce",
+          "reproduce [--scenario S]",
+          "the paper's Sec. VI: every figure and table, with verdicts",
+          {{"--scenario", true},
+           {"--out", true},
+           {"--jobs", true},
+           {"--seeds", true},
+           {"--episodes", true},
+           {"--set", true},
+           {"--quick", false},
+           {"--wait", false}},
+          Help,
+          Reproduce};
 }
 
 }  // namespace uavsim::cli

@@ -36,9 +36,9 @@
 #include <string>
 #include <vector>
 
-#include "pipeline/training_config.h"
 #include "apps/reproduce/reproduce_verdict.h"
 #include "apps/train/train.h"
+#include "pipeline/training_config.h"
 
 namespace uavsim::sim {
 
@@ -87,9 +87,9 @@ struct ReproducePlan {
 // 0, 7, 1, 6 (bit m: Modality m); "raw<mask>" for any other.
 std::string EpisodeSetName(std::uint8_t raw_modalities);
 
-// The plan for a scenario: full (60 episodes of 20 s a set, the default
-// training config capped at 10 x 1000 stage-1 observations and 60 stage-2
-// epochs, 3 seeds, z in {4, 8, 16, 32, 64}) or quick (every arm at toy size:
+// The plan for a scenario: full (30 episodes of 20 s a set, the default
+// training config capped at 6 x 1000 stage-1 observations and 30 stage-2
+// epochs, 3 seeds, z in {4, 16, 64}) or quick (every arm at toy size:
 // 6 episodes of 5 s, 2 epochs, 2 seeds, z in {4, 16, 64}; for CI and a first
 // look). o.seeds and o.episodes override. The scenario's own z is added to
 // the latent sizes.

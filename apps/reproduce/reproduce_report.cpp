@@ -28,6 +28,14 @@ using core::Json;
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
+// A bar of one number (a count, a rate, the paper's value): no interval.
+SeedStat SingleValue(double x) {
+  SeedStat s;
+  s.mean = x;
+  s.n = 1;
+  return s;
+}
+
 const char* const kModalities[] = {"camera", "lidar", "radar"};
 
 // ---------------------------------------------------------------------------
@@ -345,8 +353,8 @@ void AddOurRates(Writer& w, RateRows& r, std::map<int, Json>& metrics, int z0,
   r.csv << modality << ",uavsim,original,," << Fixed(raw, 6) << ",100\n";
   r.csv << modality << ",uavsim,preprocessed,," << Fixed(pre, 6) << ","
         << Fixed(Percent(pre, raw), 6) << "\n";
-  r.bars.push_back({modality, "original", {raw, kNaN, 1}});
-  r.bars.push_back({modality, "pre-processed", {pre, kNaN, 1}});
+  r.bars.push_back({modality, "original", SingleValue(raw)});
+  r.bars.push_back({modality, "pre-processed", SingleValue(pre)});
   for (int z : PaperTable2().latent_dims) {
     if (!metrics.count(z)) {
       ours.push_back("-");
@@ -357,7 +365,7 @@ void AddOurRates(Writer& w, RateRows& r, std::map<int, Json>& metrics, int z0,
     r.csv << modality << ",uavsim,ib," << z << "," << Fixed(c, 6) << ","
           << Fixed(Percent(c, raw), 6) << "\n";
     ours.push_back(RateCell(c, raw));
-    r.bars.push_back({modality, "IB z=" + std::to_string(z), {c, kNaN, 1}});
+    r.bars.push_back({modality, "IB z=" + std::to_string(z), SingleValue(c)});
   }
   r.table.push_back(ours);
 }
@@ -439,8 +447,8 @@ void FlopsTable(Writer& w) {
                      std::isfinite(ratio) ? results::FormatFixed(ratio, 3) : "-", r.note});
     std::string short_name = r.module.substr(0, r.module.find(" ("));
     std::replace(short_name.begin(), short_name.end(), ',', ';');
-    bars.push_back({short_name, "uavsim", {r.ours_mflops, kNaN, 1}});
-    if (r.paper_mflops) bars.push_back({short_name, "paper", {*r.paper_mflops, kNaN, 1}});
+    bars.push_back({short_name, "uavsim", SingleValue(r.ours_mflops)});
+    if (r.paper_mflops) bars.push_back({short_name, "paper", SingleValue(*r.paper_mflops)});
     if (r.module == "image encoder, paper layout") image_ratio = ratio;
     if (r.module.rfind("point cloud encoder, LiDAR", 0) == 0) cloud_ratio = ratio;
   }
@@ -643,7 +651,7 @@ void PreprocessingTable(Writer& w, const Arms& arms) {
         << s.n << "," << paper << "\n";
     table.push_back({label, variant, MeanCi(s), Fixed(paper, 4)});
     bars.push_back({label, "uavsim", s});
-    bars.push_back({label, "paper", {paper, kNaN, 1}});
+    bars.push_back({label, "paper", SingleValue(paper)});
   }
   w.Csv("table4_camera_preprocessing.csv", csv.str());
   WriteBars(w, "table4_camera_preprocessing_bars", "preprocessing_applied_to", "rmse_m", bars,
