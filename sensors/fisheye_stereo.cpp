@@ -10,6 +10,7 @@
 
 #include "core/counter_normal.h"
 #include "core/physical_constants.h"
+#include "sensors/atmosphere.h"
 
 namespace uavsim::sensors {
 namespace {
@@ -36,19 +37,6 @@ constexpr double kSphereMargin_m = 0.01;
 constexpr double kPacketConeMargin_rad = 1e-6;
 // An eye closer than this to the static world's bounds renders every pixel.
 constexpr double kStaticBoundsMargin_m = 0.01;
-
-// Koschmieder: visibility is where contrast falls to 2 %: beta = -ln(0.02) / V.
-constexpr double kKoschmieder = 3.912;
-
-// Rain extinction in the visible and near infrared: the empirical law of
-// free-space-optics link budgets, 1.076 R^0.67 dB/km with R in mm/h (after
-// Carbonneau, 1998), converted to 1/m. Rain scatters far less than fog
-// (25 mm/h: 2.1e-3 /m, a "visibility" of about 1.8 km).
-double RainExtinctionPerM(double rain_mm_h) {
-  if (rain_mm_h <= 0.0) return 0.0;
-  const double db_per_km = 1.076 * std::pow(rain_mm_h, 0.67);
-  return db_per_km * std::log(10.0) / 10.0 / 1000.0;
-}
 
 // Sky radiance by elevation: a vertical gradient from the bright horizon
 // to the darker zenith. Below the horizon (past the edge of the ground
@@ -153,11 +141,14 @@ std::vector<Ray> FisheyeStereo::WorldRays(Eye eye) const {
   return rays;
 }
 
+double CameraExtinctionPerM(const core::WeatherConfig& weather) {
+  return OpticalExtinctionPerM(weather, kVisibleWavelengthNm);
+}
+
 FisheyeStereo::Light FisheyeStereo::FrameLight(const core::WeatherConfig& weather) const {
   Light light;
   light.gain = weather.illumination * config_.exposure;
-  if (weather.fog_visibility_m) light.beta_per_m += kKoschmieder / *weather.fog_visibility_m;
-  light.beta_per_m += RainExtinctionPerM(weather.rain_mm_h);
+  light.beta_per_m = CameraExtinctionPerM(weather);
   light.airlight = light.gain * kSkyHorizon;
   return light;
 }

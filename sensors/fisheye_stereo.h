@@ -15,7 +15,10 @@
 //   miss: L = gain * sky(z), sky(z) = 0.35 + 0.4 (1 - z)^2 for the ray's
 //         world z component (0.75 at the horizon, 0.35 at the zenith)
 //   gain = weather.illumination * exposure (night, 0.01, is dark and noisy)
-//   fog/rain (Koschmieder): beta = 3.912 / visibility_m + beta_rain(rain_mm_h),
+//   fog/rain: beta = CameraExtinctionPerM(weather) = 3.912 / visibility_m
+//         (Koschmieder) + beta_rain(rain_mm_h), the shared optical atmosphere
+//         of sensors/atmosphere.h at 550 nm (rain: Marshall-Palmer drops, the
+//         same law and value as the LiDAR's),
 //         L <- L e^(-beta d) + A (1 - e^(-beta d)), A = gain * sky(horizon),
 //         d the hit distance in metres; misses become A (d = infinity)
 //   rain: a few streaks a frame (about rain_mm_h per eye at 640 x 480)
@@ -68,14 +71,20 @@
 #include <utility>
 #include <vector>
 
+#include "core/rng.h"
+#include "core/weather.h"
 #include "sensors/fisheye_model.h"
 #include "sensors/fisheye_stereo_config.h"
 #include "sensors/frames.h"
 #include "sensors/raycast_scene.h"
-#include "core/rng.h"
-#include "core/weather.h"
 
 namespace uavsim::sensors {
+
+// The camera's extinction coefficient of fog and rain together, 1/m: the
+// optical atmosphere (sensors/atmosphere.h) at kVisibleWavelengthNm, so
+// exactly 3.912 / visibility_m in fog alone, and in rain the LiDAR's value.
+// The beta of the image formation above.
+double CameraExtinctionPerM(const core::WeatherConfig& weather);
 
 class FisheyeStereo {
  public:

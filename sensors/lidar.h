@@ -36,7 +36,8 @@
 // with rho the material's lidar_reflectivity clamped to [0, 1], i the
 // incidence angle, xi the transmitter/receiver overlap (0 below
 // min_range_m, linear to 1 at full_overlap_range_m; Hahner et al. 2021) and
-// alpha the extinction coefficient at 905 nm:
+// alpha the extinction coefficient at 905 nm (sensors/atmosphere.h, the
+// optical atmosphere the camera shares at 550 nm):
 //   fog:  alpha = (3.912 / V) (905 nm / 550 nm)^-q(V), Kim, McArthur & Korevaar
 //         2001 (Proc. SPIE 4214), Koschmieder's 2 % contrast with Kim's q(V);
 //         q = 0 below V = 500 m.
@@ -102,16 +103,17 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/rng.h"
+#include "core/weather.h"
 #include "sensors/frames.h"
 #include "sensors/lidar_atmosphere.h"
 #include "sensors/lidar_config.h"
 #include "sensors/raycast_scene.h"
-#include "core/rng.h"
-#include "core/weather.h"
 
 namespace uavsim::sensors {
 
-// Extinction coefficients at 905 nm (formulas above): sensors/lidar_atmosphere.h.
+// Extinction coefficients at 905 nm (formulas above): sensors/lidar_atmosphere.h,
+// over the shared optical atmosphere of sensors/atmosphere.h.
 
 // One beam as Capture casts it: the world-frame ray (unit direction, so t is
 // in metres) and its firing time after the frame's start.

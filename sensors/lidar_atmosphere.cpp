@@ -7,39 +7,13 @@
 #include "core/physical_constants.h"
 
 namespace uavsim::sensors {
-namespace {
-
-constexpr double kWavelengthNm = 905.0;
-
-}  // namespace
 
 double FogExtinctionPerM(double visibility_m) {
-  const double v_km = visibility_m / 1000.0;
-  double q = 0.0;  // Kim et al. 2001: scattering in dense fog is wavelength independent
-  if (v_km > 50.0)
-    q = 1.6;
-  else if (v_km > 6.0)
-    q = 1.3;
-  else if (v_km > 1.0)
-    q = 0.16 * v_km + 0.34;
-  else if (v_km > 0.5)
-    q = v_km - 0.5;
-  return 3.912 / visibility_m * std::pow(kWavelengthNm / 550.0, -q);
-}
-
-double MarshallPalmerLambdaPerMm(double rain_mm_h) { return 4.1 * std::pow(rain_mm_h, -0.21); }
-
-double RainExtinctionPerM(double rain_mm_h) {
-  if (rain_mm_h <= 0.0) return 0.0;
-  const double lambda = MarshallPalmerLambdaPerMm(rain_mm_h);
-  // 2 * (pi/4) * N0 * integral D^2 e^{-Lambda D} dD = pi N0 / Lambda^3, mm^2 m^-3 -> m^-1.
-  return core::kPi * kMarshallPalmerN0 / (lambda * lambda * lambda) * 1e-6;
+  return FogExtinctionPerM(visibility_m, kLidarWavelengthNm);
 }
 
 double AtmosphericExtinctionPerM(const core::WeatherConfig& weather) {
-  double alpha = RainExtinctionPerM(weather.rain_mm_h);
-  if (weather.fog_visibility_m) alpha += FogExtinctionPerM(*weather.fog_visibility_m);
-  return alpha;
+  return OpticalExtinctionPerM(weather, kLidarWavelengthNm);
 }
 
 double LidarOverlap(const LidarConfig& c, double range_m) {
@@ -67,7 +41,7 @@ double FogEchoMeanPower(const LidarConfig& c, const core::WeatherConfig& w, doub
 
 double FogSpeckleCells(const LidarConfig& c) {
   const double n =
-      c.receiver_aperture_mm * 1e-3 * c.beam_divergence_mrad * 1e-3 / (kWavelengthNm * 1e-9);
+      c.receiver_aperture_mm * 1e-3 * c.beam_divergence_mrad * 1e-3 / (kLidarWavelengthNm * 1e-9);
   return std::max(1.0, n * n);
 }
 

@@ -1,6 +1,7 @@
-// The atmosphere as a 905 nm LiDAR sees it: extinction in fog and rain and
-// the mean and largest weather echoes a beam can receive, as functions of
-// range. Plain math (no Embree): the LiDAR model (lidar.h, where the laws
+// The atmosphere as a 905 nm LiDAR sees it: extinction in fog and rain (the
+// shared optical atmosphere of sensors/atmosphere.h at kLidarWavelengthNm)
+// and the mean and largest weather echoes a beam can receive, as functions
+// of range. Plain math (no Embree): the LiDAR model (lidar.h, where the laws
 // and their sources are given) draws its echoes from these, and a sensing
 // node that knows its sensor and the weather tells weather echoes from
 // hard targets with them (pipeline/node/lidar_preprocessor.h).
@@ -10,22 +11,19 @@
 // overlap returns rho / R^2. Ranges in metres from the sensor.
 #pragma once
 
-#include "sensors/lidar_config.h"
 #include "core/rng.h"
 #include "core/weather.h"
+#include "sensors/atmosphere.h"
+#include "sensors/lidar_config.h"
 
 namespace uavsim::sensors {
 
-// Extinction coefficients at 905 nm, in 1/m (Kim et al. 2001 for fog,
-// Marshall-Palmer drops with Q_ext = 2 for rain; lidar.h).
+// Extinction coefficients at 905 nm, in 1/m: FogExtinctionPerM(visibility_m,
+// kLidarWavelengthNm) and OpticalExtinctionPerM(weather, kLidarWavelengthNm)
+// of sensors/atmosphere.h (Kim et al. 2001 for fog; rain, Marshall-Palmer
+// drops with Q_ext = 2, is RainExtinctionPerM there at any wavelength).
 double FogExtinctionPerM(double visibility_m);
-double RainExtinctionPerM(double rain_mm_h);
 double AtmosphericExtinctionPerM(const core::WeatherConfig& weather);
-// Marshall-Palmer slope Lambda = 4.1 R^-0.21 (1/mm) at rain rate R (mm/h).
-double MarshallPalmerLambdaPerMm(double rain_mm_h);
-
-// Marshall-Palmer drop-size intercept N0, m^-3 mm^-1.
-constexpr double kMarshallPalmerN0 = 8000.0;
 // Water's Fresnel reflectance at 905 nm, ((n - 1) / (n + 1))^2 with n = 1.328.
 constexpr double kWaterFresnel = 0.0199;
 // Fog backscatter coefficient times visibility (Rasshofer et al. 2011), 1/sr.
