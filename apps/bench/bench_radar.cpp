@@ -14,7 +14,7 @@
 namespace uavsim::sim {
 namespace {
 
-constexpr double kMinTimeS = 0.1;
+constexpr double kMinTimeS = 0.5;
 
 // Wall milliseconds per call of `body`, timed by Google Benchmark for at
 // least kMinTimeS (its first, discarded runs warm up).
