@@ -259,20 +259,11 @@ ReproducePlan MakeReproducePlan(const Scenario& base, const ReproduceOptions& o)
     // Every arm at toy size: the plan's shape in minutes, not its results
     // (two seeds, three latent sizes: every artefact, within 10 minutes).
     plan.seeds = 2;
-    plan.episodes.episodes = 6;  // 4 / 1 / 1 by trajectory
-    plan.episodes.episode_s = 5.0;
-    plan.episodes.vary_weather = false;
-    pipeline::TrainingConfig& t = plan.training;
-    t.stage1_max_epochs = 2;
-    t.stage1_patience = 1;
-    t.stage1_min_samples_per_epoch = 64;
-    t.stage1_max_samples_per_epoch = 64;
-    t.stage1_max_validation_samples = 64;
-    t.stage2_max_epochs = 2;
-    t.stage2_patience = 1;
-    t.stage2_sequence_windows = 10;
-    t.stage2_min_steps_per_epoch = 2;
-    t.stage1_lr = t.stage2_lr = 2e-3;
+    const TrainDefaults toy = Defaults(TrainPreset::kToy);
+    plan.episodes.episodes = toy.plan.episodes;
+    plan.episodes.episode_s = toy.plan.episode_s;
+    plan.episodes.vary_weather = toy.plan.vary_weather;
+    plan.training = toy.training;
     plan.rate_run_s = 4.0;
   }
   if (o.episodes > 0) plan.episodes.episodes = o.episodes;

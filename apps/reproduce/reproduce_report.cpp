@@ -399,7 +399,12 @@ void DataRateTable(Writer& w, const ReproducePlan& plan) {
   for (int z : PaperTable2().latent_dims)
     r.table[0].push_back("IB z=" + std::to_string(z) + " (KB/s, %)");
   for (const char* modality : kModalities) {
-    AddOurRates(w, r, metrics, plan.scenario_latent_dim, modality);
+    try {
+      AddOurRates(w, r, metrics, plan.scenario_latent_dim, modality);
+    } catch (const Json::exception& e) {  // a rate missing from a run's metrics
+      throw std::runtime_error((fs::path(w.dir) / "data_rates").string() + ": the runs' " +
+                               "metrics.json lack " + modality + "'s data rates: " + e.what());
+    }
     AddPaperRates(r, modality);
   }
   w.MeasureNumber("table2", "IB rate", "largest at z <= 16", r.max_ib_16);

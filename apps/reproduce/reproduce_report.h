@@ -54,7 +54,7 @@ struct ReproduceReportInputs {
 
 // Writes every artefact and the reports. Returns warnings (a figure not
 // drawn: gnuplot missing, ...). Throws std::runtime_error when a training's
-// files are missing or unreadable, std::logic_error when a row of the claim
+// or a rate run's files are missing or unreadable, std::logic_error when a row of the claim
 // table reads what no artefact measures.
 std::vector<std::string> WriteReproduceReport(const ReproduceReportInputs& in);
 

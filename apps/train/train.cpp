@@ -379,17 +379,35 @@ pipeline::Dataset SplitByFrame(std::vector<pipeline::Episode> episodes, std::uin
   return d;
 }
 
-TrainDefaults Defaults(bool quick) {
+TrainDefaults Defaults(TrainPreset preset) {
   TrainDefaults d;
-  if (!quick) return d;
-  // A small model in well under 3 minutes on 2 cores, for tests.
-  // 17: the smallest count whose 15 % validation split is 3 episodes
-  // (12 gave 2, and a validation loss that moved 9x-12x between
-  // trainings that differed little).
-  d.plan.episodes = 17;
-  d.plan.episode_s = 10.0;
+  if (preset == TrainPreset::kFull) return d;
   d.plan.vary_weather = false;
   pipeline::TrainingConfig& t = d.training;
+  // A larger step for the short runs: with the anchor filter's track the
+  // untrained head's blend starts lower, and 1e-3 left the fusion validation
+  // loss 9.6x below it; 2e-3 with 16 camera epochs 14x (NOTES.md 2026-11-22 (6)).
+  t.stage1_lr = t.stage2_lr = 2e-3;
+  if (preset == TrainPreset::kToy) {
+    d.plan.episodes = 6;  // 4 / 1 / 1 by trajectory
+    d.plan.episode_s = 5.0;
+    t.stage1_max_epochs = 2;
+    t.stage1_patience = 1;
+    t.stage1_min_samples_per_epoch = 64;
+    t.stage1_max_samples_per_epoch = 64;
+    t.stage1_max_validation_samples = 64;
+    t.stage2_max_epochs = 2;
+    t.stage2_patience = 1;
+    t.stage2_sequence_windows = 10;
+    t.stage2_min_steps_per_epoch = 2;
+    return d;
+  }
+  // 17: the smallest count whose 15 % validation split is 3 episodes
+  // (12 gave 2, and a validation loss that moved 9x-12x between
+  // trainings that differed little). Fewer camera epochs to stay under 3
+  // minutes.
+  d.plan.episodes = 17;
+  d.plan.episode_s = 10.0;
   t.stage1_max_epochs = 16;
   t.stage1_patience = 8;
   t.stage1_min_samples_per_epoch = 480;
@@ -398,11 +416,6 @@ TrainDefaults Defaults(bool quick) {
   t.stage2_max_epochs = 40;
   t.stage2_patience = 10;
   t.stage2_sequence_windows = 30;
-  // A larger step for the short run, and fewer camera epochs to stay under
-  // 3 minutes: with the anchor filter's track the untrained head's blend
-  // starts lower, and 1e-3 left the fusion validation loss 9.6x below it;
-  // 2e-3 with 16 camera epochs 14x (NOTES.md 2026-11-22 (6)).
-  t.stage1_lr = t.stage2_lr = 2e-3;
   return d;
 }
 
