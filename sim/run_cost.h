@@ -3,7 +3,7 @@
 // the bytes `--record` would write. Upper estimates for the disk (a PNG or
 // PLY at most its raw frame plus headers); the wall time from per-ray and
 // per-frame costs measured on the project's 2-core reference machine under
-// load (NOTES.md, 2026-12-04: an upper estimate on an idle one), scaled by
+// load (an upper estimate on an idle one; the figures are in NOTES.md), scaled by
 // this machine's core count.
 #pragma once
 
