@@ -4,8 +4,8 @@
 #include <stdexcept>
 #include <system_error>
 
-#include "pipeline/model_checksums.h"
 #include "core/error.h"
+#include "pipeline/model_checksums.h"
 
 namespace uavsim::pipeline {
 namespace fs = std::filesystem;

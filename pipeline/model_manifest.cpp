@@ -7,10 +7,10 @@
 #include <stdexcept>
 #include <system_error>
 
-#include "pipeline/variants.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/json_io.h"
+#include "pipeline/variants.h"
 
 #ifndef UAVSIM_MODELS_DIR
 #error "UAVSIM_MODELS_DIR must name the source tree's models/ folder"

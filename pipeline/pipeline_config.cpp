@@ -4,8 +4,8 @@
 #include <cctype>
 #include <stdexcept>
 
-#include "pipeline/variants.h"
 #include "core/json_io.h"
+#include "pipeline/variants.h"
 
 namespace uavsim::pipeline {
 

@@ -14,11 +14,11 @@
 #include <cstddef>
 #include <string>
 
+#include "core/json_io.h"
 #include "pipeline/edge/fusion_kind.h"
 #include "pipeline/edge/te_align.h"
 #include "pipeline/edge/temporal_kind.h"
 #include "pipeline/node/ib_cc_config.h"
-#include "core/json_io.h"
 
 namespace uavsim::pipeline {
 

@@ -6,10 +6,10 @@
 
 #include <cstdint>
 
-#include "sensors/frame_timing.h"
-#include "sensors/radar_processing_config.h"
 #include "core/pose.h"
 #include "core/rain_attenuation.h"
+#include "sensors/frame_timing.h"
+#include "sensors/radar_processing_config.h"
 
 namespace uavsim::sensors {
 

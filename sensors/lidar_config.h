@@ -15,8 +15,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "sensors/frame_timing.h"
 #include "core/pose.h"
+#include "sensors/frame_timing.h"
 
 namespace uavsim::sensors {
 

@@ -44,9 +44,9 @@
 #include <vector>
 
 #include "channel/edge_receiver.h"
+#include "core/json_io.h"
 #include "results/mcap_writer.h"
 #include "sensors/frames.h"
-#include "core/json_io.h"
 #include "sim/scenario.h"
 #include "sim/world_model.h"
 

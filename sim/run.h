@@ -11,9 +11,9 @@
 #include <utility>
 #include <vector>
 
-#include "pipeline/training/dataset.h"
 #include "core/interrupt.h"
 #include "core/json_io.h"
+#include "pipeline/training/dataset.h"
 #include "sim/scenario.h"
 
 namespace uavsim::sim {

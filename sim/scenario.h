@@ -13,12 +13,12 @@
 
 #include "channel/base_station_config.h"
 #include "channel/link_config.h"
-#include "pipeline/pipeline_config.h"
-#include "sensors/sensor_config.h"
 #include "core/json_io.h"
 #include "core/trajectory.h"
 #include "core/weather.h"
 #include "core/world.h"
+#include "pipeline/pipeline_config.h"
+#include "sensors/sensor_config.h"
 
 namespace uavsim::sim {
 

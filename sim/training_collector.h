@@ -7,8 +7,8 @@
 // run ends keeps the fate kInFlight and no arrival time.
 #pragma once
 
-#include "pipeline/training/dataset.h"
 #include "core/time.h"
+#include "pipeline/training/dataset.h"
 #include "sim/sensing_node.h"
 #include "sim/world_model.h"
 

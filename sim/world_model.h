@@ -9,9 +9,9 @@
 #include <vector>
 
 #include "channel/path_oracle.h"
-#include "sensors/raycast_scene.h"
 #include "core/trajectory.h"
 #include "core/world_geometry.h"
+#include "sensors/raycast_scene.h"
 #include "sim/scenario.h"
 
 namespace uavsim::sim {

@@ -3,7 +3,6 @@
 #include <functional>
 #include <iostream>
 
-#include "apps/cli/cli.h"
 #include "apps/bench/bench_beam.h"
 #include "apps/bench/bench_events.h"
 #include "apps/bench/bench_flops.h"
@@ -12,6 +11,7 @@
 #include "apps/bench/bench_pipeline.h"
 #include "apps/bench/bench_radar.h"
 #include "apps/bench/bench_raycast.h"
+#include "apps/cli/cli.h"
 #include "core/error.h"
 
 namespace uavsim::cli {
@@ -73,9 +73,12 @@ std::string Help() { return kHelp; }
 }  // namespace
 
 Command BenchCommand() {
-  return {"bench", "bench [raycast|radar|events|link|beam|pipeline|noise|flops|all]", "measure the hot paths",
+  return {"bench",
+          "bench [raycast|radar|events|link|beam|pipeline|noise|flops|all]",
+          "measure the hot paths",
           {},
-          Help, Bench};
+          Help,
+          Bench};
 }
 
 }  // namespace uavsim::cli

@@ -88,9 +88,20 @@ std::string Help() { return kHelp; }
 }  // namespace
 
 Command DatasetCommand() {
-  return {"dataset", "dataset SCENARIO.json", "export the training simulation's episodes to HDF5",
-          {{"--out", true}, {"--episodes", true}, {"--episode-s", true}, {"--seed", true}, {"--jobs", true}, {"--model", true}, {"--data", true}, {"--set", true}, {"--force", false}},
-          Help, Dataset};
+  return {"dataset",
+          "dataset SCENARIO.json",
+          "export the training simulation's episodes to HDF5",
+          {{"--out", true},
+           {"--episodes", true},
+           {"--episode-s", true},
+           {"--seed", true},
+           {"--jobs", true},
+           {"--model", true},
+           {"--data", true},
+           {"--set", true},
+           {"--force", false}},
+          Help,
+          Dataset};
 }
 
 }  // namespace uavsim::cli

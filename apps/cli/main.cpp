@@ -81,7 +81,6 @@ __attribute__((section(".preinit_array"),
                used)) void (*const kInstallHandlersFirst)(int, char**,
                                                           char**) = InstallHandlersFirst;
 
-
 }  // namespace
 
 int main(int argc, char** argv) {

@@ -69,8 +69,7 @@ std::string Help() { return kHelp; }
 
 Command ReportCommand() {
   return {"report", "report DIR", "redraw a run's or a sweep's report.html from its files",
-          {},
-          Help, Report};
+          {},       Help,         Report};
 }
 
 }  // namespace uavsim::cli

@@ -135,9 +135,18 @@ std::string Help() { return kHelp; }
 }  // namespace
 
 Command RunCommand() {
-  return {"run", "run SCENARIO.json", "run a scenario and write its run directory",
-          {{"--out", true}, {"--seed", true}, {"--duration", true}, {"--record", true}, {"--set", true}, {"--force", false}, {"--verbose", false}},
-          Help, Run};
+  return {"run",
+          "run SCENARIO.json",
+          "run a scenario and write its run directory",
+          {{"--out", true},
+           {"--seed", true},
+           {"--duration", true},
+           {"--record", true},
+           {"--set", true},
+           {"--force", false},
+           {"--verbose", false}},
+          Help,
+          Run};
 }
 
 }  // namespace uavsim::cli

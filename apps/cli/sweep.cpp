@@ -100,9 +100,12 @@ std::string Help() { return kHelp; }
 }  // namespace
 
 Command SweepCommand() {
-  return {"sweep", "sweep SPEC.json", "run a grid of scenarios (packet loss x weather x seeds)",
+  return {"sweep",
+          "sweep SPEC.json",
+          "run a grid of scenarios (packet loss x weather x seeds)",
           {{"--out", true}, {"--jobs", true}, {"--shard", true}, {"--wait", false}},
-          Help, Sweep};
+          Help,
+          Sweep};
 }
 
 }  // namespace uavsim::cli

@@ -210,8 +210,7 @@ const pipeline::Variant& ParseTrainVariant(const ParsedArgs& a, sim::TrainComman
   if (auto v = a.Value("--split")) {
     if (*v != "trajectory" && *v != "frame")
       throw UsageError("uavsim train: --split expects trajectory or frame, got '" + *v + "'");
-    c.split = *v == "frame" ? pipeline::DataSplit::kFrame
-                            : pipeline::DataSplit::kTrajectory;
+    c.split = *v == "frame" ? pipeline::DataSplit::kFrame : pipeline::DataSplit::kTrajectory;
   }
   if (auto v = a.Value("--train-episodes"))
     c.train_episodes = static_cast<int>(UnsignedOption("train", "--train-episodes", *v, 100000));
@@ -221,17 +220,16 @@ const pipeline::Variant& ParseTrainVariant(const ParsedArgs& a, sim::TrainComman
         "uavsim train: --episodes needs at least 3 (training, validation, test), --threads and "
         "--jobs at least 1");
   c.training = sim::ResolveTrainingConfig(c.quick, a.Value("--config").value_or(""),
-                                                  a.Values("--config-set"), variant);
+                                          a.Values("--config-set"), variant);
   return *variant;
 }
 
 // The stages, held-out scores and information limit, on stdout.
 void PrintTrainReport(const sim::TrainCommand& c, const pipeline::TrainReport& r) {
   for (const auto& st : r.stages)
-    std::printf(
-        "%-15s %5zu train %5zu val  epochs %3d (best %3d)  val loss %.4g -> %.4g  %.0f s\n",
-        st.name.c_str(), st.train_items, st.validation_items, st.epochs, st.best_epoch,
-        st.initial_validation_loss, st.best_validation_loss, st.seconds);
+    std::printf("%-15s %5zu train %5zu val  epochs %3d (best %3d)  val loss %.4g -> %.4g  %.0f s\n",
+                st.name.c_str(), st.train_items, st.validation_items, st.epochs, st.best_epoch,
+                st.initial_validation_loss, st.best_validation_loss, st.seconds);
   for (const auto& [method, ev] : r.test) {
     std::printf("held-out RMSE of %s (m):", method.c_str());
     for (const auto& [k, v] : ev.rmse_m) std::printf(" %s %.3f", k.c_str(), v);
@@ -287,8 +285,8 @@ int Train(const ParsedArgs& a, int argc, char** argv) {
   const pipeline::Variant& variant = ParseTrainVariant(a, c);
   sim::Scenario s = sim::LoadScenario(c.scenario_file, Overrides(a));
   sim::ApplyVariantNodes(variant, s);  // e.g. raw: "without preprocessing"
-  c.out_dir = a.Value("--out").value_or("models/" + s.name +
-                                        (c.variant == "paper" ? "" : "-" + c.variant));
+  c.out_dir =
+      a.Value("--out").value_or("models/" + s.name + (c.variant == "paper" ? "" : "-" + c.variant));
   const std::optional<pipeline::TrainReport> report = sim::RunTraining(s, c);
   if (!report) return kExitOk;  // an MPI rank that only simulated episodes
   if (!c.quiet) PrintTrainReport(c, *report);
@@ -312,8 +310,9 @@ std::vector<Option> TrainOptions() {
 }  // namespace
 
 Command TrainCommand() {
-  return {"train", "train SCENARIO.json", "train the UAVLoc model by simulation",
-          TrainOptions(), Help, Train, RefuseReplacedLast};
+  return {
+      "train", "train SCENARIO.json", "train the UAVLoc model by simulation", TrainOptions(), Help,
+      Train,   RefuseReplacedLast};
 }
 
 }  // namespace uavsim::cli

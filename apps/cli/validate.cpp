@@ -54,8 +54,7 @@ int Validate(const ParsedArgs& a, int, char**) {
             s.nodes.size() == 1 ? "" : "s", s.duration_s, e.rays_per_s,
             Duration(sim::EstimateWallSeconds(s)).c_str());
         if (!record.empty())
-          std::printf("; --record writes at most %.3g bytes",
-                      sim::EstimateRecordBytes(s, record));
+          std::printf("; --record writes at most %.3g bytes", sim::EstimateRecordBytes(s, record));
         std::printf(")\n");
         std::fflush(stdout);
       }
@@ -73,9 +72,12 @@ std::string Help() { return kHelp; }
 }  // namespace
 
 Command ValidateCommand() {
-  return {"validate", "validate SCENARIO.json", "check a scenario; exit 0, or exit 2 with FILE: /json/pointer: message",
+  return {"validate",
+          "validate SCENARIO.json",
+          "check a scenario; exit 0, or exit 2 with FILE: /json/pointer: message",
           {{"--set", true}, {"--record", true}, {"--resolved", false}},
-          Help, Validate};
+          Help,
+          Validate};
 }
 
 }  // namespace uavsim::cli

@@ -7,18 +7,18 @@
 #include <memory>
 #include <vector>
 
-#include "pipeline/model_bundle.h"
-#include "pipeline/torch_runtime.h"
-#include "pipeline/training/dataset_io.h"
-#include "results/run_directory.h"
+#include "apps/dataset/dataset_file.h"
+#include "apps/sweep/process_farm.h"
+#include "apps/train/train.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/interrupt.h"
 #include "core/progress.h"
-#include "apps/dataset/dataset_file.h"
+#include "pipeline/model_bundle.h"
+#include "pipeline/torch_runtime.h"
+#include "pipeline/training/dataset_io.h"
+#include "results/run_directory.h"
 #include "sim/edge_server.h"
-#include "apps/sweep/process_farm.h"
-#include "apps/train/train.h"
 #include "sim/version.h"
 
 namespace uavsim::sim {

@@ -9,8 +9,8 @@
 #include <stdexcept>
 #include <utility>
 
-#include "pipeline/training/dataset_io.h"
 #include "core/time.h"
+#include "pipeline/training/dataset_io.h"
 
 namespace uavsim::sim {
 namespace {

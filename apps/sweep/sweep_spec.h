@@ -29,8 +29,8 @@
 #include <string>
 #include <vector>
 
-#include "results/sweep_report.h"
 #include "core/json_io.h"
+#include "results/sweep_report.h"
 #include "sim/scenario.h"
 
 namespace uavsim::sim {

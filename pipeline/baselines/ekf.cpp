@@ -11,8 +11,8 @@
 #include <unsupported/Eigen/MatrixFunctions>
 #include <utility>
 
-#include "pipeline/tracking/coordinated_turn.h"
 #include "core/physical_constants.h"
+#include "pipeline/tracking/coordinated_turn.h"
 
 namespace uavsim::pipeline {
 namespace {

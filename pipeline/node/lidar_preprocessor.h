@@ -42,11 +42,11 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#include "core/weather.h"
 #include "pipeline/node/observations.h"
 #include "pipeline/node/preprocess_config.h"
 #include "sensors/frames.h"
 #include "sensors/lidar_config.h"
-#include "core/weather.h"
 
 namespace uavsim::pipeline {
 

@@ -40,12 +40,12 @@
 #include <deque>
 #include <vector>
 
+#include "core/weather.h"
 #include "pipeline/node/observations.h"
 #include "pipeline/node/point_clustering.h"
 #include "pipeline/node/preprocess_config.h"
 #include "sensors/fmcw_radar_config.h"
 #include "sensors/frames.h"
-#include "core/weather.h"
 
 namespace uavsim::pipeline {
 

@@ -15,9 +15,9 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "fuzz_support.h"
-#include "core/json_io.h"
 #include "apps/sweep/sweep_spec.h"
+#include "core/json_io.h"
+#include "fuzz_support.h"
 
 namespace {
 

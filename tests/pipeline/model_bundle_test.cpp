@@ -7,14 +7,14 @@
 #include <filesystem>
 #include <string>
 
+#include "core/error.h"
+#include "core/sha256.h"
 #include "pipeline/edge/uavloc_model.h"
 #include "pipeline/model_bundle.h"
 #include "pipeline/model_checksums.h"
 #include "pipeline/node/ib_encoder.h"
 #include "pipeline/node/ib_model_io.h"
 #include "pipeline/torch_runtime.h"
-#include "core/error.h"
-#include "core/sha256.h"
 #include "test_support.h"
 
 namespace uavsim::pipeline {

@@ -6,11 +6,11 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/error.h"
+#include "core/json_io.h"
 #include "pipeline/model_bundle.h"
 #include "pipeline/training/trainer.h"
 #include "pipeline/training_config.h"
-#include "core/error.h"
-#include "core/json_io.h"
 #include "test_support.h"
 
 namespace uavsim::pipeline {

@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "sensors/fisheye_model.h"
 #include "core/rng.h"
+#include "sensors/fisheye_model.h"
 
 namespace uavsim::sensors {
 namespace {

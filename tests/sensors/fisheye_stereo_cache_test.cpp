@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "sensors/fisheye_stereo.h"
 #include "core/world_geometry.h"
+#include "sensors/fisheye_stereo.h"
 #include "test_support.h"
 
 namespace uavsim::sensors {

@@ -11,11 +11,11 @@
 #include <stdexcept>
 #include <vector>
 
-#include "sensors/fisheye_stereo.h"
-#include "sensors/image_io.h"
 #include "core/error.h"
 #include "core/json_io.h"
 #include "core/world_geometry.h"
+#include "sensors/fisheye_stereo.h"
+#include "sensors/image_io.h"
 
 namespace uavsim::sensors {
 namespace {

@@ -10,8 +10,8 @@
 #include <cstring>
 #include <vector>
 
-#include "sensors/fmcw_radar.h"
 #include "core/world_geometry.h"
+#include "sensors/fmcw_radar.h"
 #include "test_support.h"
 
 namespace uavsim::sensors {

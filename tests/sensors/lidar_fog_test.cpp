@@ -13,10 +13,10 @@
 #include <string>
 #include <vector>
 
-#include "sensors/lidar.h"
-#include "sensors/lidar_atmosphere.h"
 #include "core/error.h"
 #include "core/json_io.h"
+#include "sensors/lidar.h"
+#include "sensors/lidar_atmosphere.h"
 
 using uavsim::core::Mix64;
 using uavsim::core::RngStream;

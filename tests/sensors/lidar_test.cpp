@@ -18,9 +18,9 @@
 #include <vector>
 #include "test_support.h"
 
-#include "sensors/ply_io.h"
 #include "core/error.h"
 #include "core/json_io.h"
+#include "sensors/ply_io.h"
 
 using uavsim::core::Material;
 using uavsim::core::RadarClass;

@@ -19,14 +19,14 @@
 #include <thread>
 #include <vector>
 
-#include "sensors/fmcw_radar.h"
-#include "sensors/radar_image.h"
 #include "core/error.h"
 #include "core/interrupt.h"
 #include "core/json_io.h"
 #include "core/pose.h"
 #include "core/rng.h"
 #include "core/world_geometry.h"
+#include "sensors/fmcw_radar.h"
+#include "sensors/radar_image.h"
 
 using uavsim::core::RngStream;
 using uavsim::sensors::AngleMethod;

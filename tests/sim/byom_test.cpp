@@ -14,8 +14,8 @@
 #include <tuple>
 #include <vector>
 
-#include "pipeline/training/dataset_io.h"
 #include "core/json_io.h"
+#include "pipeline/training/dataset_io.h"
 #include "test_support.h"
 
 namespace {

@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "results/csv.h"
 #include "core/json_io.h"
+#include "results/csv.h"
 #include "sim/scenario.h"
 #include "sim/world_model.h"
 #include "test_support.h"

@@ -16,12 +16,12 @@
 #include <string>
 #include <vector>
 
+#include "apps/dataset/dataset_file.h"
+#include "core/json_io.h"
 #include "pipeline/model_bundle.h"
 #include "pipeline/torch_runtime.h"
 #include "pipeline/training/dataset.h"
 #include "pipeline/training/dataset_io.h"
-#include "core/json_io.h"
-#include "apps/dataset/dataset_file.h"
 #include "test_support.h"
 
 namespace fs = std::filesystem;

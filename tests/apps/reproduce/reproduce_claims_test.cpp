@@ -10,9 +10,9 @@
 #include <string>
 #include <vector>
 
+#include "apps/reproduce/reproduce_document.h"
 #include "results/csv.h"
 #include "results/sweep_report.h"
-#include "apps/reproduce/reproduce_document.h"
 #include "test_support.h"
 
 namespace fs = std::filesystem;

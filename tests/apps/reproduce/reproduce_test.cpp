@@ -19,10 +19,10 @@
 #include <thread>
 #include <vector>
 
-#include "pipeline/variants.h"
-#include "core/json_io.h"
 #include "apps/reproduce/reproduce.h"
 #include "apps/reproduce/reproduce_report.h"
+#include "core/json_io.h"
+#include "pipeline/variants.h"
 #include "test_support.h"
 
 namespace fs = std::filesystem;

@@ -20,8 +20,8 @@
 #include <sstream>
 #include <thread>
 
-#include "core/json_io.h"
 #include "apps/sweep/sweep_spec.h"
+#include "core/json_io.h"
 #include "test_support.h"
 
 namespace fs = std::filesystem;

@@ -10,8 +10,8 @@
 #include <utility>
 #include <vector>
 
-#include "pipeline/training/dataset.h"
 #include "apps/train/train.h"
+#include "pipeline/training/dataset.h"
 
 namespace {
 

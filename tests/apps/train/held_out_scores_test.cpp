@@ -14,8 +14,8 @@
 #include <utility>
 #include <vector>
 
-#include "pipeline/training/dataset.h"
 #include "apps/train/held_out_scores.h"
+#include "pipeline/training/dataset.h"
 #include "sim/scenario.h"
 
 namespace {

@@ -18,14 +18,14 @@
 #include <tuple>
 #include <utility>
 
+#include "apps/train/train.h"
+#include "core/json_io.h"
 #include "pipeline/model_bundle.h"
 #include "pipeline/torch_runtime.h"
 #include "pipeline/training/dataset_io.h"
 #include "pipeline/training/trainer.h"
 #include "pipeline/training_config.h"
 #include "results/csv.h"
-#include "core/json_io.h"
-#include "apps/train/train.h"
 #include "test_support.h"
 
 namespace fs = std::filesystem;

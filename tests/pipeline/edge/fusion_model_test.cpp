@@ -11,11 +11,11 @@
 #include <string>
 #include <vector>
 
+#include "core/error.h"
+#include "core/json_io.h"
 #include "pipeline/edge/edge_localizer.h"
 #include "pipeline/edge/uavloc_model.h"
 #include "pipeline/torch_runtime.h"
-#include "core/error.h"
-#include "core/json_io.h"
 #include "test_support.h"
 
 namespace uavsim::pipeline {

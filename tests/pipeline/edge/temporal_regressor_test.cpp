@@ -6,18 +6,18 @@
 #include <torch/torch.h>
 
 #include <catch2/catch.hpp>
-#include <fstream>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <tuple>
 #include <vector>
 
+#include "core/json_io.h"
 #include "pipeline/edge/temporal_regressor.h"
 #include "pipeline/edge/uavloc_model.h"
 #include "pipeline/torch_runtime.h"
-#include "core/json_io.h"
 #include "test_support.h"
 
 namespace uavsim::pipeline {

@@ -9,11 +9,11 @@
 #include <string>
 #include <vector>
 
+#include "core/error.h"
 #include "pipeline/node/ib_encoder.h"
 #include "pipeline/node/ib_model_io.h"
 #include "pipeline/node/node_encoder.h"
 #include "pipeline/torch_runtime.h"
-#include "core/error.h"
 #include "test_support.h"
 
 namespace uavsim::pipeline {

@@ -3,9 +3,9 @@
 #include <stdexcept>
 #include <vector>
 
+#include "core/json_io.h"
 #include "pipeline/node/ib_cc_config.h"
 #include "pipeline/node/ib_normalization.h"
-#include "core/json_io.h"
 #include "test_support.h"
 
 namespace uavsim::pipeline {

@@ -10,9 +10,9 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
+#include "core/rng.h"
 #include "pipeline/node/camera_preprocessor.h"
 #include "sensors/fisheye_model.h"
-#include "core/rng.h"
 
 namespace uavsim::pipeline {
 namespace {

@@ -2,9 +2,9 @@
 #include <catch2/catch.hpp>
 #include <string>
 
-#include "pipeline/node/preprocess_config.h"
 #include "core/error.h"
 #include "core/json_io.h"
+#include "pipeline/node/preprocess_config.h"
 
 namespace uavsim::pipeline {
 namespace {

@@ -7,8 +7,8 @@
 #include <cmath>
 #include <vector>
 
-#include "pipeline/node/lidar_preprocessor.h"
 #include "core/rng.h"
+#include "pipeline/node/lidar_preprocessor.h"
 
 namespace uavsim::pipeline {
 namespace {

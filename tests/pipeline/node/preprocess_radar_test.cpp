@@ -6,10 +6,10 @@
 #include <map>
 #include <vector>
 
-#include "pipeline/node/point_clustering.h"
-#include "pipeline/node/radar_preprocessor.h"
 #include "core/interrupt.h"
 #include "core/rng.h"
+#include "pipeline/node/point_clustering.h"
+#include "pipeline/node/radar_preprocessor.h"
 
 namespace uavsim::pipeline {
 namespace {

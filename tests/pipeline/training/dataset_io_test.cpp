@@ -12,9 +12,9 @@
 #include <string>
 #include <vector>
 
+#include "core/error.h"
 #include "pipeline/training/dataset.h"
 #include "pipeline/training/dataset_io.h"
-#include "core/error.h"
 #include "test_support.h"
 
 namespace uavsim::pipeline {

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "core/json_io.h"
 #include "pipeline/anchored/anchors.h"
 #include "pipeline/edge/edge_localizer.h"
 #include "pipeline/edge/uavloc_model.h"
@@ -25,7 +26,6 @@
 #include "pipeline/training/dataset.h"
 #include "pipeline/training/trainer.h"
 #include "pipeline/variants.h"
-#include "core/json_io.h"
 #include "test_support.h"
 
 namespace uavsim::pipeline {
