@@ -76,6 +76,8 @@ core::Json ExtensionsOf(const ModelManifest& m) {
     ext.push_back(std::string("point_norm=") + PointNormName(t.point_norm));
   if (t.ib_mse_units != IbMseUnits::kMetres)
     ext.push_back(std::string("ib_mse_units=") + IbMseUnitsName(t.ib_mse_units));
+  // The IB-CC models' dropout rate; the paper's is 0.1 (Sec. VI).
+  if (t.dropout != 0.1) ext.push_back("dropout=" + core::FormatNumber(t.dropout));
   // Stage 1 left out observations whose cluster or bearing missed the truth.
   if (t.stage1_label_gate_m > 0.0)
     ext.push_back("stage1_label_gate_m=" + core::FormatNumber(t.stage1_label_gate_m));

@@ -640,15 +640,19 @@ Evaluation Evaluate(UavLocModel& model, const std::vector<WindowSequence>& seque
       sum += squared.sum().item<double>();
       count += w.sum().item<double>();
       const torch::Tensor counted = w[0].contiguous(), errors = squared.contiguous();
+      const torch::Tensor present = (mask[0] > 0.5).to(torch::kInt32).contiguous();
       const auto c = counted.accessor<float, 1>();
       const auto e = errors.accessor<float, 1>();
+      const auto a = present.accessor<int, 2>();
       auto& windows = ev.squared_error_m2[key];
       auto& positions = ev.position_m[key];
       const std::size_t episode = static_cast<std::size_t>(&s - sequences.data());
       for (std::int64_t j = 0; j < c.size(0); ++j)
         if (c[j] > 0.0f) {
           windows[{episode, j}] = scale * scale * static_cast<double>(e[j]);
-          positions[{episode, j}] = {world(y_hat[0][j]), world(s.truth[j])};
+          int arrived = 0;
+          for (int m = 0; m < kModalityCount; ++m) arrived |= a[j][m] << m;
+          positions[{episode, j}] = {world(y_hat[0][j]), world(s.truth[j]), arrived};
         }
     }
     ev.windows[key] = static_cast<std::size_t>(count);
@@ -852,14 +856,15 @@ namespace {
 // window, per modality subset (what Fig. 15's beams are steered at).
 void WriteTestEstimates(const TrainReport& r, const std::string& path) {
   std::ostringstream f;
-  f << "method,subset,episode,window,x_m,y_m,z_m,true_x_m,true_y_m,true_z_m\n";
+  f << "method,subset,episode,window,x_m,y_m,z_m,true_x_m,true_y_m,true_z_m,arrived\n";
   f.precision(9);
   for (const auto& [method, ev] : r.test)
     for (const auto& [subset, windows] : ev.position_m)
       for (const auto& [at, p] : windows)
         f << method << ',' << subset << ',' << at.first << ',' << at.second + 1 << ','
           << p.estimate_m.x() << ',' << p.estimate_m.y() << ',' << p.estimate_m.z() << ','
-          << p.truth_m.x() << ',' << p.truth_m.y() << ',' << p.truth_m.z() << '\n';
+          << p.truth_m.x() << ',' << p.truth_m.y() << ',' << p.truth_m.z() << ','
+          << (p.arrived ? ModalitySubsetName(p.arrived) : "none") << '\n';
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
   out << f.str();
   if (!out) throw std::runtime_error(path + ": cannot write");

@@ -50,6 +50,7 @@ struct Evaluation {
   // in training_report.json (test_estimates.csv holds them).
   struct Positions {
     Eigen::Vector3d estimate_m, truth_m;
+    int arrived = 0;  // the modalities that arrived in the window (bit m: Modality m)
   };
   std::map<std::string, std::map<std::pair<std::size_t, std::int64_t>, Positions>> position_m;
 };

@@ -226,7 +226,8 @@ TEST_CASE("ModelManifest: records the training config, and reads models without 
   // The shipped model was trained with the defaults but for the keys its
   // command sets (docs/methods-and-models.md: point_frame centroid, point_norm
   // none, the stage-1 label gate at 3 m, stage 1 up to 300 epochs with
-  // patience 20 and the step halved after 5), and says so.
+  // patience 20 and the step halved after 5, no dropout, stage 2 on crops of
+  // 100 windows), and says so.
   const ModelManifest shipped = ReadModelManifest(DefaultModelPath());
   REQUIRE(shipped.training.has_value());
   TrainingConfig expected;
@@ -236,6 +237,8 @@ TEST_CASE("ModelManifest: records the training config, and reads models without 
   expected.stage1_max_epochs = 300;
   expected.stage1_patience = 20;
   expected.stage1_plateau_epochs = 5;
+  expected.dropout = 0.0;
+  expected.stage2_sequence_windows = 100;
   CHECK(TrainingConfigJson(*shipped.training).dump() == TrainingConfigJson(expected).dump());
 
   // The block is read as strictly as a config file.

@@ -335,6 +335,14 @@ TEST_CASE("CLI: run writes the run directory of DESIGN.md", "[sim][slow]") {
              Catch::StartsWith("snr_db,beam,rate_bps_hz\n"));
   CHECK(metrics["uavloc_model"]["same_layout"] == true);
   CHECK(metrics["uavloc_model"]["heads"] == Json::array({"paper", "anchored"}));
+  // The shipped model's departures from the paper, each named: its training
+  // config's (docs/methods-and-models.md gives the command), then the nodes'.
+  CHECK(metrics["uavloc_model"]["extensions"] ==
+        Json::array({"camera_stereo_branches=shared", "camera_eye_pool_side=4",
+                     "camera_roi_geometry=true", "te_align_tau_origin=window",
+                     "point_frame=centroid", "point_norm=none", "dropout=0",
+                     "stage1_label_gate_m=3", "lidar.weather_echo_rejection=true",
+                     "radar.rain_doppler_rejection=true", "radar.selection=persistent"}));
 
   // Where the time went: every node's capture, pre-processing and encoding,
   // each method, the beams, the writing; "other" is the rest of wall_s, so

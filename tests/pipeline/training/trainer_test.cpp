@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <map>
 #include <random>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -511,7 +512,7 @@ TEST_CASE("Trainer: no edge head trains stage 1 alone, its decoders scored", "[p
   CHECK_FALSE(fs::exists(dir + "/uavloc.pt"));
   // No head, no estimates: the header alone.
   CHECK(testing::ReadFile(dir + "/test_estimates.csv") ==
-        "method,subset,episode,window,x_m,y_m,z_m,true_x_m,true_y_m,true_z_m\n");
+        "method,subset,episode,window,x_m,y_m,z_m,true_x_m,true_y_m,true_z_m,arrived\n");
 }
 
 TEST_CASE("EdgeLocalizer: the trained model rides out windows with every modality missing",
@@ -755,19 +756,25 @@ TEST_CASE("Trainer: every variant trains on shared stage-1 encoders and lowers i
     std::istringstream csv(testing::ReadFile(root + "/paper/test_estimates.csv"));
     std::string line;
     std::getline(csv, line);
-    CHECK(line == "method,subset,episode,window,x_m,y_m,z_m,true_x_m,true_y_m,true_z_m");
+    CHECK(line == "method,subset,episode,window,x_m,y_m,z_m,true_x_m,true_y_m,true_z_m,arrived");
     double sum = 0.0;
     std::size_t n = 0;
+    std::set<std::string> arrivals;
     while (std::getline(csv, line)) {
       std::vector<std::string> c;
       std::istringstream cells(line);
       for (std::string cell; std::getline(cells, cell, ',');) c.push_back(cell);
-      REQUIRE(c.size() == 10);
+      REQUIRE(c.size() == 11);
+      // What arrived lies within the subset the method was allowed.
+      for (const char* m : {"camera", "lidar", "radar"})
+        if (c[10].find(m) != std::string::npos) CHECK(c[1].find(m) != std::string::npos);
+      arrivals.insert(c[10]);
       if (c[0] != "uavloc" || c[1] != "all") continue;
       for (int k = 0; k < 3; ++k) sum += std::pow(std::stod(c[4 + k]) - std::stod(c[7 + k]), 2);
       ++n;
     }
     CHECK(n == first.test.at("uavloc").windows.at("all"));
+    CHECK(arrivals.size() > 1);  // the subsets' windows differ in what arrived
     REQUIRE(n > 0);
     CHECK(std::sqrt(sum / n) == Approx(first.test.at("uavloc").rmse_m.at("all")).epsilon(1e-4));
   }
