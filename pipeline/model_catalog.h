@@ -68,6 +68,8 @@ class ModelCatalog {
   ModelCatalog(ModelCatalog&&) noexcept;
 
   bool needs_model() const { return needs_model_; }
+  // The scenario model's manifest (empty when no method needs a model).
+  const std::string& model_path() const { return model_path_; }
   // Model folders without checksums.sha256 (older models): only loading
   // them checks their files.
   const std::vector<std::string>& unchecked() const { return unchecked_; }

@@ -5,6 +5,7 @@
 #include <iostream>
 #include <set>
 
+#include "core/sha256.h"
 #include "pipeline/anchored/geometric_anchor.h"
 #include "pipeline/model_checksums.h"
 #include "pipeline/torch_runtime.h"
@@ -81,6 +82,31 @@ std::unique_ptr<pipeline::Ekf> MakeEkf(const Scenario& s) {
     }
   }
   return ekf;
+}
+
+namespace {
+
+std::string FingerprintOf(const pipeline::ModelCatalog& catalog) {
+  namespace fs = std::filesystem;
+  if (!catalog.needs_model()) return "none";
+  std::vector<fs::path> files;
+  for (const auto& e : fs::directory_iterator(fs::path(catalog.model_path()).parent_path()))
+    if (e.is_regular_file()) files.push_back(e.path());
+  std::sort(files.begin(), files.end());
+  std::string list;
+  for (const fs::path& f : files)
+    list += f.filename().string() + " " + core::Sha256FileHex(f.string()) + "\n";
+  return core::Sha256Hex(list);
+}
+
+}  // namespace
+
+std::string EncoderFingerprint(const Scenario& s, const std::string& file) {
+  return FingerprintOf(pipeline::ModelCatalog(CatalogOf(s, file)));
+}
+
+std::string EdgeServer::encoder_fingerprint() const {
+  return catalog_ ? FingerprintOf(*catalog_) : "none";
 }
 
 void CheckTrainedModel(const Scenario& s, const std::string& file, bool quiet) {

@@ -66,6 +66,13 @@ void CheckTrainedModel(const Scenario& s, const std::string& file, bool quiet = 
 std::string CheckEncoderModel(const Scenario& s, const std::string& file, const std::string& dir,
                               const std::string& command);
 
+// What identifies the IB-CC encoders the scenario's nodes run, for the
+// sensing key (sim/sensing_trace.h): "none" when no method needs a model,
+// else SHA-256 over the model folder's files (names and contents). Loads no
+// weights. Throws core::ConfigError as CheckTrainedModel for a model that
+// does not resolve.
+std::string EncoderFingerprint(const Scenario& s, const std::string& file);
+
 // The `ekf` method as a run builds it: the scenario's EkfConfig with the
 // target's limits and size, every node's sensor added under its id.
 std::unique_ptr<pipeline::Ekf> MakeEkf(const Scenario& s);
@@ -106,6 +113,9 @@ class EdgeServer {
   // the edge heads the model holds, "paper" and/or "anchored"); null
   // without a model.
   const core::Json& model_info() const;
+  // EncoderFingerprint of the scenario this server runs ("none" without
+  // methods).
+  std::string encoder_fingerprint() const;
 
   // Times each method into `profile` ("edge/<method>"); null: no timing.
   void set_profile(core::WallProfile* profile) { profile_ = profile; }

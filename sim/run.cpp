@@ -8,6 +8,7 @@
 #include <set>
 
 #include "channel/uplink.h"
+#include "core/error.h"
 #include "core/interrupt.h"
 #include "core/periodic_process.h"
 #include "core/progress.h"
@@ -21,6 +22,7 @@
 #include "sim/recorder.h"
 #include "sim/run_writer.h"
 #include "sim/sensing_node.h"
+#include "sim/sensing_trace.h"
 #include "sim/training_collector.h"
 #include "sim/window_scorer.h"
 #include "sim/world_model.h"
@@ -89,12 +91,10 @@ Uplinks MakeUplinks(core::Simulator& sim, const Scenario& s, EdgeServer& edge,
 
 // The sensing nodes in scenario order, each wired to its uplink, the edge's
 // accounting and encoder, and the collector; their frame clocks started.
-std::vector<std::unique_ptr<SensingNode>> StartNodes(core::Simulator& sim, core::SimTime t_end,
-                                                     const Scenario& s, WorldModel& world,
-                                                     Recorder* recorder, EdgeServer& edge,
-                                                     const Uplinks& links,
-                                                     TrainingCollector* collector,
-                                                     core::WallProfile* profile) {
+std::vector<std::unique_ptr<SensingNode>> StartNodes(
+    core::Simulator& sim, core::SimTime t_end, const Scenario& s, WorldModel& world,
+    Recorder* recorder, EdgeServer& edge, const Uplinks& links, TrainingCollector* collector,
+    core::WallProfile* profile, SensingTraceWriter* trace, SensingTraceReader* replay) {
   std::vector<std::unique_ptr<SensingNode>> nodes;
   for (std::size_t i = 0; i < s.nodes.size(); ++i) {
     const NodeConfig& config = s.nodes[i];
@@ -105,13 +105,17 @@ std::vector<std::unique_ptr<SensingNode>> StartNodes(core::Simulator& sim, core:
     wiring.encoder = edge.encoder(modality);
     wiring.message_bytes = edge.MessageBytes(modality);
     wiring.profile = profile;
+    wiring.trace = trace;
+    wiring.replay = replay;
     if (collector)
       wiring.observer = [collector](const SensingNode& node, double t_s, NodeContent& content) {
         collector->OnFrame(node, t_s, content);
       };
+    // A node that replays a trace senses nothing: it gets no sensor.
     nodes.push_back(std::make_unique<SensingNode>(
-        config, static_cast<std::uint32_t>(i), MakeNodeSensor(config, s, world, recorder, profile),
-        s, std::move(wiring)));
+        config, static_cast<std::uint32_t>(i),
+        replay ? nullptr : MakeNodeSensor(config, s, world, recorder, profile), s,
+        std::move(wiring)));
     nodes.back()->Start(sim, t_end);
   }
   return nodes;
@@ -169,6 +173,9 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
   const auto wall_since_start = [wall_start] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   };
+  if (!o.replay_dir.empty() && (o.collect || !o.record.empty()))
+    throw core::UsageError(
+        "a run that replays a sensing trace records nothing (the trace holds no sensor frames)");
   core::WallProfile profile;
   const std::string started_utc = UtcNow();
   std::optional<results::RunDirectory> dir;
@@ -189,8 +196,16 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
   if (o.collect) collector.emplace(*o.collect, world, s.pipeline.window_s, t_end);
   TrainingCollector* const collecting = collector ? &*collector : nullptr;
   const Uplinks links = MakeUplinks(sim, s, edge, collecting);
-  const auto nodes = StartNodes(sim, t_end, s, world, recorder ? &*recorder : nullptr, edge, links,
-                                collecting, &profile);
+  std::optional<SensingTraceWriter> trace;
+  std::optional<SensingTraceReader> replay;
+  if (!o.trace_dir.empty() || !o.replay_dir.empty()) {
+    const std::string key = SensingKey(s, edge.encoder_fingerprint());
+    if (!o.trace_dir.empty()) trace.emplace(key, s);
+    if (!o.replay_dir.empty()) replay.emplace(o.replay_dir, key, s);
+  }
+  const auto nodes =
+      StartNodes(sim, t_end, s, world, recorder ? &*recorder : nullptr, edge, links, collecting,
+                 &profile, trace ? &*trace : nullptr, replay ? &*replay : nullptr);
 
   // At every alignment window's deadline (its end plus the late allowance)
   // the edge estimates the target's position at the window's end from
@@ -233,6 +248,7 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
   progress.Finish();
 
   const auto traffic = TrafficByModality(nodes);
+  if (trace) trace->Write(o.trace_dir);
   if (o.collect)
     return Summarize(s, traffic, nullptr, truth.table().rows(), wall_since_start(), profile);
   FinishedRun run{s, o, {}, started_utc, truth.table(), *scores, edge, world, traffic, nullptr};

@@ -33,6 +33,12 @@ struct RunOptions {
   // its capture time and whether it reached the edge in time, and the truth
   // at every window's end; and nothing is written (out_dir is ignored).
   pipeline::Episode* collect = nullptr;
+  // Sensing traces (sim/sensing_trace.h): write what the nodes send to
+  // trace_dir/<key>.trace when the run completes; take the nodes' frames
+  // from replay_dir/<key>.trace instead of sensing (the same outputs, byte
+  // for byte; refused with a recording of sensor frames or `collect`).
+  std::string trace_dir;
+  std::string replay_dir;
 };
 
 struct RunSummary {
@@ -58,7 +64,8 @@ struct RunSummary {
   std::uint64_t common_windows = 0;
 };
 
-// Throws core::UsageError (exists, not forced), std::runtime_error (I/O) or
+// Throws core::UsageError (exists, not forced; a trace to replay that is
+// missing or does not match), std::runtime_error (I/O) or
 // core::Interrupted (SIGINT/SIGTERM during the run); the run directory then does not
 // exist under its final name.
 RunSummary RunScenario(const Scenario& scenario, const RunOptions& options);

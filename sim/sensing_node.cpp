@@ -16,6 +16,7 @@
 #include "sensors/lidar.h"
 #include "sensors/radar_processor.h"
 #include "sim/recorder.h"
+#include "sim/sensing_trace.h"
 #include "sim/world_model.h"
 
 namespace uavsim::sim {
@@ -275,7 +276,9 @@ SensingNode::SensingNode(const NodeConfig& config, std::uint32_t index,
              config.sensor.timing().clock_jitter_s,
              core::RngStream(scenario.seed, "node/" + config.id + "/clock"),
              [this](std::int64_t, core::SimTime t) { OnFrame(t); }),
-      ahead_of_time_(scenario.execution.parallel_nodes) {}
+      ahead_of_time_(scenario.execution.parallel_nodes && !wiring_.replay) {
+  if (!sensor_ && !wiring_.replay) throw std::logic_error("a sensing node without a sensor");
+}
 
 SensingNode::~SensingNode() {
   // Frames in the making use the sensor and the noise stream: wait for them.
@@ -368,6 +371,12 @@ NodeFrame SensingNode::TakeFrameNamed(core::SimTime t) {
 }
 
 void SensingNode::OnFrame(core::SimTime t) {
+  TracedFrame frame = wiring_.replay ? wiring_.replay->Take(index_, t) : SenseFrame(t);
+  if (wiring_.trace) wiring_.trace->Add(index_, frame);
+  Send(t, std::move(frame));
+}
+
+TracedFrame SensingNode::SenseFrame(core::SimTime t) {
   const double t_s = core::ToSeconds(t);
   NodeFrame frame = TakeFrameNamed(t);
   if (frame.record) {
@@ -375,20 +384,28 @@ void SensingNode::OnFrame(core::SimTime t) {
         core::WallProfile::Measure(wiring_.profile, "node/" + config_.id + "/record");
     frame.record();  // in capture order, on the event loop's thread
   }
-  auto content = std::make_shared<NodeContent>(std::move(frame.content));
-  content->node_id = config_.id;
+  TracedFrame out{t, frame.raw_bytes, frame.sight, std::move(frame.content)};
+  NodeContent& content = out.content;
+  content.node_id = config_.id;
   // The node sends its latent when it found something, else a bare header
   // ("nothing seen").
-  const bool found = content->FoundSomething();
+  const bool found = content.FoundSomething();
   if (found && wiring_.encoder) {
     const auto timing =
         core::WallProfile::Measure(wiring_.profile, "node/" + config_.id + "/encode");
-    content->latent = content->camera ? wiring_.encoder->Encode(*content->camera)
-                                      : wiring_.encoder->Encode(*content->points);
+    content.latent = content.camera ? wiring_.encoder->Encode(*content.camera)
+                                    : wiring_.encoder->Encode(*content.points);
   }
-  if (found && wiring_.observer) wiring_.observer(*this, t_s, *content);
+  if (found && wiring_.observer) wiring_.observer(*this, t_s, content);
   // The latent travels, not the crops: the edge's filter needs the geometry only.
-  if (content->camera) content->camera->crop_left.clear(), content->camera->crop_right.clear();
+  if (content.camera) content.camera->crop_left.clear(), content.camera->crop_right.clear();
+  return out;
+}
+
+void SensingNode::Send(core::SimTime t, TracedFrame frame) {
+  auto content = std::make_shared<NodeContent>(std::move(frame.content));
+  content->node_id = config_.id;
+  const bool found = content->FoundSomething();
   const std::uint32_t bytes_sent = found ? wiring_.message_bytes : channel::kMessageHeaderBytes;
   ++traffic_.frames;
   traffic_.raw_bytes += frame.raw_bytes;

@@ -33,6 +33,9 @@ namespace uavsim::sim {
 
 class Recorder;
 class WorldModel;
+class SensingTraceReader;
+class SensingTraceWriter;
+struct TracedFrame;
 
 // What a node's message carries besides its size, opaque to the channel:
 // the pre-processed measurement (for the edge's classical filter and the
@@ -134,9 +137,15 @@ class SensingNode {
     std::uint32_t message_bytes = 0;  // a message that carries something (header included)
     FrameObserver observer;
     core::WallProfile* profile = nullptr;  // times recording and encoding ("node/<id>/...")
+    // Sensing traces (sim/sensing_trace.h): each frame as sent is added to
+    // `trace`; with `replay` the node takes its frames from there instead of
+    // sensing (it then needs no sensor, and nothing is recorded or observed).
+    SensingTraceWriter* trace = nullptr;
+    SensingTraceReader* replay = nullptr;
   };
 
-  // `index`: the node's position in the scenario's node list. With the
+  // `index`: the node's position in the scenario's node list; `sensor` may
+  // be null when the wiring replays a trace. With the
   // scenario's execution.parallel_nodes, the node makes its next two frames
   // on threads of their own ahead of their time, while the event loop runs
   // (the same frames, byte for byte).
@@ -165,6 +174,10 @@ class SensingNode {
     std::future<NodeFrame> frame;
   };
   void OnFrame(core::SimTime t);
+  // A frame sensed, recorded, encoded and observed, as it is sent.
+  TracedFrame SenseFrame(core::SimTime t);
+  // Accounts a frame and sends its message.
+  void Send(core::SimTime t, TracedFrame frame);
   NodeFrame TakeFrame(core::SimTime t);
   NodeFrame TakeFrameNamed(core::SimTime t);
   void MakeAhead(core::SimTime t);

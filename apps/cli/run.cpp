@@ -20,8 +20,8 @@ using core::UsageError;
 const char* kHelp =
     "usage: uavsim run SCENARIO.json [--out DIR] [--seed N] [--duration S] [--record "
     "camera,lidar,radar,mcap]\n"
-    "                               [--set /json/pointer=value]... [--force] [--quiet] "
-    "[--verbose]\n"
+    "                               [--set /json/pointer=value]... [--trace DIR | --replay DIR]\n"
+    "                               [--force] [--quiet] [--verbose]\n"
     "\n"
     "Runs the scenario and writes DIR (default runs/NAME-sSEED): manifest.json, truth.csv,\n"
     "estimates.csv, metrics.json (RMSE per method, packets, data rates), packets.csv,\n"
@@ -40,6 +40,10 @@ const char* kHelp =
     "                  DIR/recording.mcap, every sensor, the world, truth, estimates and\n"
     "                  uplink in one file for Foxglove (docs/recordings.md)\n"
     "  --set P=V       override the value at JSON pointer P\n"
+    "  --trace DIR     also write what the sensing nodes sent to DIR/KEY.trace (KEY: a hash\n"
+    "                  of everything that determines sensing; not links, methods or beams)\n"
+    "  --replay DIR    take the nodes' messages from DIR/KEY.trace instead of sensing: the\n"
+    "                  same outputs, byte for byte, in a fraction of the time (docs/speed.md)\n"
     "  --force         replace DIR if it exists\n"
     "  --quiet         no progress or summary output\n"
     "  --verbose       a failing TorchScript method's whole traceback after its line\n";
@@ -96,6 +100,17 @@ int Run(const ParsedArgs& a, int, char**) {
   o.force = a.Has("--force");
   o.scenario_file = file;
   o.record = RecordList("run", a);
+  o.trace_dir = a.Value("--trace").value_or("");
+  o.replay_dir = a.Value("--replay").value_or("");
+  if (a.Has("--trace") && o.trace_dir.empty())
+    throw UsageError("uavsim run: --trace expects a folder");
+  if (a.Has("--replay") && o.replay_dir.empty())
+    throw UsageError("uavsim run: --replay expects a folder");
+  if (!o.replay_dir.empty() && !o.trace_dir.empty())
+    throw UsageError(
+        "uavsim run: --trace and --replay: give one (a replay senses nothing to trace)");
+  if (!o.replay_dir.empty() && !o.record.empty())
+    throw UsageError("uavsim run: --replay and --record: a trace holds no sensor frames to record");
   const sim::Scenario s = sim::LoadScenario(file, overrides);
   sim::CheckTrainedModel(s, file, a.Has("--quiet"));  // what validate checks, first
   o.out_dir = a.Value("--out").value_or("runs/" + s.name + "-s" + std::to_string(s.seed));
@@ -143,6 +158,8 @@ Command RunCommand() {
            {"--duration", true},
            {"--record", true},
            {"--set", true},
+           {"--trace", true},
+           {"--replay", true},
            {"--force", false},
            {"--verbose", false}},
           Help,

@@ -13,7 +13,8 @@ namespace {
 using core::UsageError;
 
 const char* kHelp =
-    "usage: uavsim sweep SPEC.json [--out DIR] [--jobs N] [--shard I/N] [--wait] [--quiet]\n"
+    "usage: uavsim sweep SPEC.json [--out DIR] [--jobs N] [--shard I/N] [--wait]\n"
+    "                              [--no-traces | --keep-traces] [--quiet]\n"
     "       uavsim sweep merge DIR [--quiet]\n"
     "       mpirun -np K uavsim sweep SPEC.json [--out DIR] [--jobs N]\n"
     "\n"
@@ -35,6 +36,11 @@ const char* kHelp =
     "                Slurm array task; then `uavsim sweep merge DIR` writes the tables\n"
     "  --wait        when another sweep runs in DIR (its lock DIR/.lock), wait for it\n"
     "                instead of refusing (exit 2, naming its process)\n"
+    "  --no-traces   every point senses its world itself; by default points that differ\n"
+    "                only in links, methods or beams sense once: the first writes\n"
+    "                DIR/traces/KEY.trace, the others replay it (the same outputs, byte for\n"
+    "                byte; docs/speed.md)\n"
+    "  --keep-traces keep DIR/traces when the sweep is complete (removed by default)\n"
     "  --quiet       no progress or summary output\n"
     "exit codes: 0 all points done, 1 some points failed (rerun to retry them), 2 bad\n"
     "input, 130 interrupted (finished points are kept)\n";
@@ -66,6 +72,10 @@ int Sweep(const ParsedArgs& a, int, char**) {
   sim::SweepOptions o;
   o.quiet = quiet;
   o.wait = a.Has("--wait");
+  o.traces = !a.Has("--no-traces");
+  o.keep_traces = a.Has("--keep-traces");
+  if (!o.traces && o.keep_traces)
+    throw UsageError("uavsim sweep: --no-traces and --keep-traces: give one");
   if (auto v = a.Value("--jobs"))
     o.jobs = static_cast<int>(UnsignedOption("sweep", "--jobs", *v, 1024));
   if (o.jobs < 1) throw UsageError("uavsim sweep: --jobs needs at least 1");
@@ -103,7 +113,12 @@ Command SweepCommand() {
   return {"sweep",
           "sweep SPEC.json",
           "run a grid of scenarios (packet loss x weather x seeds)",
-          {{"--out", true}, {"--jobs", true}, {"--shard", true}, {"--wait", false}},
+          {{"--out", true},
+           {"--jobs", true},
+           {"--shard", true},
+           {"--wait", false},
+           {"--no-traces", false},
+           {"--keep-traces", false}},
           Help,
           Sweep};
 }

@@ -19,6 +19,7 @@
 #include <fstream>
 #include <map>
 #include <optional>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 #include <thread>
@@ -73,6 +74,33 @@ pid_t LaunchTask(const ProcessFarm& farm, std::size_t task, const std::string& d
   ::_exit(rc);
 }
 
+// Tasks not yet started, in order, and those not yet ended: a task is
+// ready when the task it comes after (ProcessFarm::after) has ended.
+class TaskQueue {
+ public:
+  TaskQueue(const ProcessFarm& farm, std::deque<std::size_t> tasks)
+      : farm_(farm), waiting_(std::move(tasks)), unended_(waiting_.begin(), waiting_.end()) {}
+  bool empty() const { return waiting_.empty(); }
+  std::size_t size() const { return waiting_.size(); }
+  // The first ready task, taken out of the queue (it stays unended).
+  std::optional<std::size_t> PopReady() {
+    for (auto it = waiting_.begin(); it != waiting_.end(); ++it) {
+      const std::optional<std::size_t> first = farm_.after ? farm_.after(*it) : std::nullopt;
+      if (first && *first != *it && unended_.count(*first)) continue;
+      const std::size_t task = *it;
+      waiting_.erase(it);
+      return task;
+    }
+    return std::nullopt;
+  }
+  void Ended(std::size_t task) { unended_.erase(task); }
+
+ private:
+  const ProcessFarm& farm_;
+  std::deque<std::size_t> waiting_;
+  std::set<std::size_t> unended_;
+};
+
 // Children of this process, task by pid.
 class ChildPool {
  public:
@@ -84,14 +112,14 @@ class ChildPool {
   void Launch(std::size_t task, const std::string& dir) {
     running_[LaunchTask(farm_, task, dir, threads_)] = task;
   }
-  // Starts tasks from the front of `queue` into their local folders while
+  // Starts the first ready tasks of `queue` into their local folders while
   // there are free slots. Returns whether it started any.
-  bool Fill(std::deque<std::size_t>& queue) {
+  bool Fill(TaskQueue& queue) {
     bool started = false;
-    while (HasSlot() && !queue.empty()) {
-      const std::size_t task = queue.front();
-      queue.pop_front();
-      Launch(task, farm_.local_dir(task));
+    while (HasSlot()) {
+      const std::optional<std::size_t> task = queue.PopReady();
+      if (!task) break;
+      Launch(*task, farm_.local_dir(*task));
       started = true;
     }
     return started;
@@ -169,9 +197,10 @@ bool UnderMpirun() {
   return false;
 }
 
-FarmCounts RunFarmLocal(const ProcessFarm& farm, std::deque<std::size_t> queue,
+FarmCounts RunFarmLocal(const ProcessFarm& farm, std::deque<std::size_t> tasks,
                         const FarmOptions& o) {
-  core::Progress progress(o.label, static_cast<double>(queue.size()), farm.unit, o.quiet);
+  core::Progress progress(o.label, static_cast<double>(tasks.size()), farm.unit, o.quiet);
+  TaskQueue queue(farm, std::move(tasks));
   ChildPool pool(farm, o.jobs);
   FarmCounts counts;
   while (!queue.empty() || !pool.empty()) {
@@ -183,6 +212,7 @@ FarmCounts RunFarmLocal(const ProcessFarm& farm, std::deque<std::size_t> queue,
         pool.KillAll();
         throw core::Interrupted();
       }
+      queue.Ended(done->first);
       done->second == 0 ? ++counts.ran : ++counts.failed;
       progress.Update(static_cast<double>(counts.ran + counts.failed));
     }
@@ -193,14 +223,17 @@ FarmCounts RunFarmLocal(const ProcessFarm& farm, std::deque<std::size_t> queue,
 }
 
 FarmCounts RunFarmCoordinator(boost::mpi::communicator& world, const ProcessFarm& farm,
-                              std::deque<std::size_t> queue, const FarmOptions& o) {
+                              std::deque<std::size_t> tasks, const FarmOptions& o) {
   core::Progress progress(o.label + " (" + std::to_string(world.size()) + " ranks)",
-                          static_cast<double>(queue.size()), farm.unit, o.quiet);
+                          static_cast<double>(tasks.size()), farm.unit, o.quiet);
+  TaskQueue queue(farm, std::move(tasks));
   ChildPool pool(farm, o.jobs);
   FarmCounts counts;
   int workers = world.size() - 1;  // not yet told to stop
   std::size_t remote = 0;
-  const auto count = [&](int rc) {
+  std::deque<int> asking;  // workers with a free slot and no answer yet
+  const auto count = [&](std::size_t task, int rc) {
+    queue.Ended(task);
     rc == 0 ? ++counts.ran : ++counts.failed;
     progress.Update(static_cast<double>(counts.ran + counts.failed));
   };
@@ -209,15 +242,23 @@ FarmCounts RunFarmCoordinator(boost::mpi::communicator& world, const ProcessFarm
     bool busy = false;
     while (auto st = world.iprobe(boost::mpi::any_source, kRequest)) {
       world.recv(st->source(), kRequest);
+      asking.push_back(st->source());
+      busy = true;
+    }
+    // A worker gets a ready task, or is told to stop when none is left; it
+    // waits while the tasks left wait for others to end.
+    while (!asking.empty()) {
       long long assign = -1;
-      if (!queue.empty()) {
-        assign = static_cast<long long>(queue.front());
-        queue.pop_front();
+      if (const std::optional<std::size_t> task = queue.PopReady()) {
+        assign = static_cast<long long>(*task);
         ++remote;
+      } else if (!queue.empty()) {
+        break;
       } else {
         --workers;
       }
-      world.send(st->source(), kAssign, assign);
+      world.send(asking.front(), kAssign, assign);
+      asking.pop_front();
       busy = true;
     }
     while (auto st = world.iprobe(boost::mpi::any_source, kResult)) {
@@ -225,13 +266,13 @@ FarmCounts RunFarmCoordinator(boost::mpi::communicator& world, const ProcessFarm
       world.recv(st->source(), kResult, r);
       --remote;
       if (r.rc == 0) farm.commit_remote(static_cast<std::size_t>(r.task), r.files);
-      count(r.rc);
+      count(static_cast<std::size_t>(r.task), r.rc);
       busy = true;
     }
     // Rank 0's own slots; a task is handed to a worker first when both wait.
     busy = pool.Fill(queue) || busy;
     while (const auto done = pool.Reap()) {
-      count(done->second);
+      count(done->first, done->second);
       busy = true;
     }
     if (!busy) Nap();

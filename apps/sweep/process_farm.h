@@ -18,6 +18,7 @@
 #include <cstddef>
 #include <deque>
 #include <functional>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -43,6 +44,10 @@ struct ProcessFarm {
   std::function<std::string(std::size_t task)> local_dir;
   // At rank 0: a task another rank ran succeeded; write its files.
   std::function<void(std::size_t task, const TaskFiles& files)> commit_remote;
+  // Optional: the task that must have ended (succeeded or failed) before
+  // `task` starts, if it is among the tasks run; nullopt: none. (A sweep's
+  // points that replay a sensing trace wait for the point that writes it.)
+  std::function<std::optional<std::size_t>(std::size_t task)> after;
 };
 
 struct FarmOptions {

@@ -3,6 +3,7 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <boost/mpi/communicator.hpp>
 #include <boost/mpi/environment.hpp>
 #include <cerrno>
@@ -24,7 +25,9 @@
 #include "core/file_lock.h"
 #include "core/progress.h"
 #include "results/run_directory.h"
+#include "sim/edge_server.h"
 #include "sim/run.h"
+#include "sim/sensing_trace.h"
 
 namespace uavsim::sim {
 namespace {
@@ -176,19 +179,87 @@ void CommitPoint(const std::string& dir, const std::string& id, const TaskFiles&
   run.Commit();
 }
 
+// Which points sense once for the others (SweepOptions::traces): each
+// point's sensing key, the point that writes a group's trace, and the one
+// each point waits for.
+struct TracePlan {
+  std::string dir;           // absolute DIR/traces; empty: every point senses
+  std::string sweep_record;  // absolute DIR/sweep.json: whether DIR is on this host
+  std::vector<std::string> key;
+  std::vector<bool> writes;
+  std::vector<std::optional<std::size_t>> after;
+};
+
+// The sensing key of every point (the model's fingerprint once per model).
+std::vector<std::string> SensingKeys(const SweepSpec& spec) {
+  std::map<std::string, std::string> fingerprints;  // pipeline as JSON -> fingerprint
+  std::vector<std::string> keys;
+  for (std::size_t i = 0; i < spec.points.size(); ++i) {
+    const Scenario s = spec.PointScenario(i);
+    const std::string pipeline = ResolvedJson(s).at("pipeline").dump() + "@" + s.base_dir;
+    auto it = fingerprints.find(pipeline);
+    if (it == fingerprints.end())
+      it = fingerprints.emplace(pipeline, EncoderFingerprint(s, spec.file)).first;
+    keys.push_back(SensingKey(s, it->second));
+  }
+  return keys;
+}
+
+// Among the points to run, the first of each key whose trace is missing
+// writes it when others share the key; they wait for it.
+TracePlan PlanTraces(const SweepSpec& spec, const SweepOptions& o,
+                     const std::deque<std::size_t>& queue) {
+  TracePlan plan;
+  const std::size_t n = spec.points.size();
+  plan.writes.assign(n, false);
+  plan.after.assign(n, std::nullopt);
+  if (!o.traces) return plan;
+  plan.dir = fs::absolute(fs::path(o.out_dir) / "traces").lexically_normal().string();
+  plan.sweep_record = fs::absolute(fs::path(o.out_dir) / "sweep.json").string();
+  plan.key = SensingKeys(spec);
+  std::map<std::string, std::vector<std::size_t>> groups;
+  for (std::size_t i : queue) groups[plan.key[i]].push_back(i);
+  for (const auto& [key, points] : groups) {
+    std::error_code ec;
+    if (points.size() < 2 || fs::exists(SensingTracePath(plan.dir, key), ec)) continue;
+    plan.writes[points.front()] = true;
+    for (std::size_t j = 1; j < points.size(); ++j) plan.after[points[j]] = points.front();
+  }
+  return plan;
+}
+
+// Leaders first, so that the points waiting for them start as early as can be.
+std::deque<std::size_t> LeadersFirst(std::deque<std::size_t> queue, const TracePlan& plan) {
+  std::stable_partition(queue.begin(), queue.end(), [&](std::size_t i) { return plan.writes[i]; });
+  return queue;
+}
+
+// Where point i's run traces or replays: replays a trace that exists, writes
+// one if it leads its group; neither when DIR is not on this host.
+void WireTraces(const TracePlan& plan, std::size_t i, RunOptions& o) {
+  std::error_code ec;
+  if (plan.dir.empty() || !fs::is_regular_file(plan.sweep_record, ec)) return;
+  if (fs::is_regular_file(SensingTracePath(plan.dir, plan.key[i]), ec))
+    o.replay_dir = plan.dir;
+  else if (plan.writes[i])
+    o.trace_dir = plan.dir;
+}
+
 // Each point is a whole run directory: DIR/points/<id> when rank 0 runs it.
-ProcessFarm PointFarm(const SweepSpec& spec, const std::string& dir) {
+ProcessFarm PointFarm(const SweepSpec& spec, const std::string& dir, const TracePlan& plan) {
   ProcessFarm farm;
   farm.command = "uavsim sweep";
   farm.unit = "points";
-  farm.run = [&spec](std::size_t i, const std::string& run_dir) {
+  farm.run = [&spec, &plan](std::size_t i, const std::string& run_dir) {
     RunOptions o;
     o.out_dir = run_dir;
     o.quiet = true;
     o.report = false;  // the sweep's report is the product; a point's is drawn on demand
     o.scenario_file = spec.file + "#" + spec.points[i].id;
+    WireTraces(plan, i, o);
     RunScenario(spec.PointScenario(i), o);
   };
+  farm.after = [&plan](std::size_t i) { return plan.after[i]; };
   farm.describe = [&spec](std::size_t i) { return "point " + spec.points[i].id; };
   farm.local_dir = [&spec, dir](std::size_t i) { return PointDir(dir, spec.points[i].id); };
   farm.commit_remote = [&spec, dir](std::size_t i, const TaskFiles& files) {
@@ -255,7 +326,8 @@ SweepOutcome RunSweep(const SweepSpec& spec, const SweepOptions& o) {
     out.ranks = world->size();
   }
   const bool coordinator = !world || world->rank() == 0;
-  const ProcessFarm farm = PointFarm(spec, o.out_dir);
+  TracePlan plan;  // every rank plans alike (rank 0's plan is the one that counts)
+  ProcessFarm farm = PointFarm(spec, o.out_dir, plan);
   FarmOptions fo;
   fo.jobs = o.jobs;
   fo.quiet = o.quiet;
@@ -269,6 +341,8 @@ SweepOutcome RunSweep(const SweepSpec& spec, const SweepOptions& o) {
     if (!coordinator) {
       out.mpi_worker = true;
       world->barrier();  // rank 0 has prepared DIR
+      plan = PlanTraces(spec, o, PointsToRun(spec, o, out));
+      out.already_done = 0;
       add(RunFarmWorker(*world, farm, fo));
       return out;
     }
@@ -282,6 +356,8 @@ SweepOutcome RunSweep(const SweepSpec& spec, const SweepOptions& o) {
         lock.emplace(LockPath(o), "uavsim sweep: " + o.out_dir, o.wait);
         RemoveStalePartials(o.out_dir, ShardIds(spec, o));
         queue = PointsToRun(spec, o, out);
+        plan = PlanTraces(spec, o, queue);
+        queue = LeadersFirst(std::move(queue), plan);
         ok = 1;
       } catch (const std::exception& e) {
         error = e.what();
@@ -297,6 +373,8 @@ SweepOutcome RunSweep(const SweepSpec& spec, const SweepOptions& o) {
       lock.emplace(LockPath(o), "uavsim sweep: " + o.out_dir, o.wait);
       RemoveStalePartials(o.out_dir, ShardIds(spec, o));
       queue = PointsToRun(spec, o, out);
+      plan = PlanTraces(spec, o, queue);
+      queue = LeadersFirst(std::move(queue), plan);
       add(RunFarmLocal(farm, std::move(queue), fo));
     }
   } catch (const core::Interrupted&) {
@@ -315,6 +393,8 @@ SweepOutcome RunSweep(const SweepSpec& spec, const SweepOptions& o) {
     const SweepOutcome merged = MergeSweep(o.out_dir);
     out.warnings = merged.warnings;
     out.reported = true;
+    std::error_code ec;
+    if (!o.keep_traces) fs::remove_all(fs::path(o.out_dir) / "traces", ec);
   }
   return out;
 }

@@ -11,6 +11,9 @@
 //    asks (slow points do not stall the rest) and runs points itself; other
 //    ranks run theirs in a private temporary folder and send the files back,
 //    so only rank 0 writes DIR (no shared file system needed).
+//  - sensing once: points whose sensing keys match (sim/sensing_trace.h)
+//    sense once; the others replay that trace (DIR/traces/). A point whose
+//    trace is not on its host's file system (a rank without DIR) senses.
 //  - --shard I/N: only the points whose index is I modulo N (a batch
 //    scheduler's array task); `uavsim sweep merge DIR` then writes the
 //    tables and plots once every shard is done.
@@ -38,6 +41,14 @@ struct SweepOptions {
   // Another sweep holds DIR's lock (the same shard): wait for it instead of
   // refusing (core::UsageError naming its process).
   bool wait = false;
+  // Sensing traces (sim/sensing_trace.h): points that differ only in what
+  // cannot change sensing (links, methods, beams) share one sensing pass.
+  // The first point of each such group writes DIR/traces/KEY.trace, the
+  // others wait for it and replay it (the same outputs, byte for byte).
+  // false: every point senses (--no-traces).
+  bool traces = true;
+  // Keep DIR/traces when the sweep is complete (else removed).
+  bool keep_traces = false;
 };
 
 struct SweepOutcome {

@@ -890,3 +890,26 @@ TEST_CASE("Sweep: a second sweep into the same folder is refused naming the firs
   CHECK(FinishedPoints(out).size() == 8);
   CHECK(fs::exists(out + "/summary.csv"));
 }
+
+TEST_CASE("Sweep: points that share their sensing sense once, to the same results as --no-traces",
+          "[sim][sweep][slow]") {
+  // The reference senses each seed once (its two loss values share the
+  // sensing) and removes its traces when complete.
+  const Reference& ref = Ref();
+  CHECK(!fs::exists(ref.dir + "/traces"));
+  const std::string root = TempDir("sweep-traces");
+  const CliResult none =
+      RunCli({"sweep", ref.spec, "--out", root + "/none", "--jobs", "2", "--quiet", "--no-traces"});
+  INFO(none.err);
+  REQUIRE(none.exit_code == 0);
+  CheckSameSweep(ref.dir, root + "/none");
+  // --keep-traces: one trace per seed.
+  const CliResult kept = RunCli(
+      {"sweep", ref.spec, "--out", root + "/kept", "--jobs", "2", "--quiet", "--keep-traces"});
+  INFO(kept.err);
+  REQUIRE(kept.exit_code == 0);
+  std::size_t traces = 0;
+  for (const auto& e : fs::directory_iterator(root + "/kept/traces"))
+    traces += e.path().extension() == ".trace";
+  CHECK(traces == 2);
+}

@@ -1,0 +1,156 @@
+// Sensing traces (sim/sensing_trace.h) through the built binary: a run that
+// replays what another run's nodes sent gives that run's outputs byte for
+// byte, whatever its links or methods; a trace that does not fit is refused.
+#include <algorithm>
+#include <catch2/catch.hpp>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "core/json_io.h"
+#include "test_support.h"
+
+namespace fs = std::filesystem;
+using uavsim::core::Json;
+using uavsim::testing::ReadFile;
+using uavsim::testing::RunCli;
+using uavsim::testing::TempDir;
+using uavsim::testing::WriteFile;
+
+namespace {
+
+const std::string kDefault = std::string(UAVSIM_SOURCE_DIR) + "/scenarios/default.json";
+
+Json WithoutWallClock(Json j) {
+  for (const char* k : {"wall_s", "realtime_factor", "profile_s", "started_utc"}) j.erase(k);
+  return j;
+}
+
+std::vector<std::string> Files(const std::string& root) {
+  std::vector<std::string> f;
+  for (const auto& e : fs::recursive_directory_iterator(root))
+    if (e.is_regular_file()) f.push_back(fs::relative(e.path(), root).string());
+  std::sort(f.begin(), f.end());
+  return f;
+}
+
+// Every file of `a` is in `b`, equal byte for byte but for the wall-clock
+// fields and report.html (which shows the wall times).
+void CheckSameRun(const std::string& a, const std::string& b) {
+  const auto files = Files(a);
+  REQUIRE(files.size() > 8);
+  CHECK(Files(b) == files);
+  for (const std::string& f : files) {
+    INFO(f);
+    if (!fs::exists(b + "/" + f) || f == "report.html") continue;
+    if (f == "metrics.json" || f == "manifest.json")
+      CHECK(WithoutWallClock(Json::parse(ReadFile(a + "/" + f))) ==
+            WithoutWallClock(Json::parse(ReadFile(b + "/" + f))));
+    else
+      CHECK(ReadFile(a + "/" + f) == ReadFile(b + "/" + f));
+  }
+}
+
+std::vector<std::string> TraceFiles(const std::string& dir) {
+  std::vector<std::string> f;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(dir, ec)) f.push_back(e.path().string());
+  return f;
+}
+
+// 2 s of the default scenario in fog (sensing and links both see weather),
+// with the settings a variant adds.
+uavsim::testing::CliResult Run(const std::string& out, std::vector<std::string> extra) {
+  std::vector<std::string> args = {"run", kDefault,  "--out",
+                                   out,   "--quiet", "--duration",
+                                   "2",   "--set",   "/weather/fog_visibility_m=800"};
+  args.insert(args.end(), extra.begin(), extra.end());
+  return RunCli(args);
+}
+
+}  // namespace
+
+TEST_CASE("Trace: a replayed run equals a full run across links and methods", "[sim][slow]") {
+  const std::string dir = TempDir("trace-links");
+  const std::string traces = dir + "/traces";
+  // The trace is written by a run whose links differ from every variant's.
+  const auto t = Run(dir + "/traced", {"--trace", traces, "--set", "/links/default/latency_ms=40"});
+  INFO(t.err);
+  REQUIRE(t.exit_code == 0);
+  REQUIRE(TraceFiles(traces).size() == 1);
+
+  const std::vector<std::pair<std::string, std::vector<std::string>>> variants = {
+      {"loss", {"--set", "/links/default/loss/p=0.3"}},
+      {"jitter",
+       {"--set", R"(/links/default/jitter={"type": "pareto", "scale_ms": 20, "shape": 2})"}},
+      {"bandwidth", {"--set", "/links/default/bandwidth_mbps=0.05"}},
+      {"gilbert_elliott",
+       {"--set",
+        R"(/links/default/loss={"type": "gilbert_elliott", "p": 0.2, "r": 0.3, "loss_bad": 0.9})"}},
+      {"outage",
+       {"--set", R"(/links/default/outages=[{"from_s": 0.5, "to_s": 1.2}])", "--set",
+        "/pipeline/late_allowance_s=0.05"}},
+      {"methods", {"--set", R"(/pipeline/methods=["uavloc", "ekf", "uavloc_lidar"])"}},
+  };
+  for (const auto& [name, settings] : variants) {
+    INFO(name);
+    const auto full = Run(dir + "/" + name + "-full", settings);
+    INFO(full.err);
+    REQUIRE(full.exit_code == 0);
+    std::vector<std::string> replay = settings;
+    replay.insert(replay.end(), {"--replay", traces});
+    const auto r = Run(dir + "/" + name + "-replay", replay);
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    CheckSameRun(dir + "/" + name + "-full", dir + "/" + name + "-replay");
+  }
+  // The variants differ from one another (the test would pass vacuously
+  // if the settings changed nothing).
+  CHECK(ReadFile(dir + "/loss-full/packets.csv") != ReadFile(dir + "/jitter-full/packets.csv"));
+  CHECK(ReadFile(dir + "/outage-full/estimates.csv") != ReadFile(dir + "/loss-full/estimates.csv"));
+}
+
+TEST_CASE("Trace: a trace of other sensing, another version or cut short is refused",
+          "[sim][slow]") {
+  const std::string dir = TempDir("trace-refused");
+  const std::string traces = dir + "/traces";
+  REQUIRE(Run(dir + "/traced", {"--trace", traces}).exit_code == 0);
+  const auto files = TraceFiles(traces);
+  REQUIRE(files.size() == 1);
+  const std::string trace = files.front();
+
+  // Rain changes sensing as well as the links: another key, no trace for it.
+  auto r = Run(dir + "/rain", {"--replay", traces, "--set", "/weather/rain_mm_h=5"});
+  CHECK(r.exit_code == 2);
+  CHECK_THAT(r.err, Catch::Contains("no sensing trace") && Catch::Contains(traces));
+  CHECK(!fs::exists(dir + "/rain"));
+  // So does another seed, and a node moved.
+  r = Run(dir + "/seed", {"--replay", traces, "--seed", "7"});
+  CHECK(r.exit_code == 2);
+  r = Run(dir + "/moved", {"--replay", traces, "--set", "/nodes/1/sensor/pose/position_m/2=3"});
+  CHECK(r.exit_code == 2);
+
+  // Another format version, named.
+  std::string bytes = ReadFile(trace);
+  const std::string original = bytes;
+  bytes[12] = 99;  // the u32 version after the 12-byte magic
+  WriteFile(trace, bytes);
+  r = Run(dir + "/version", {"--replay", traces});
+  CHECK(r.exit_code == 2);
+  CHECK_THAT(r.err, Catch::Contains(trace) && Catch::Contains("format version 99"));
+  CHECK(!fs::exists(dir + "/version"));
+  // Cut short.
+  WriteFile(trace, original.substr(0, original.size() / 2));
+  r = Run(dir + "/short", {"--replay", traces});
+  CHECK(r.exit_code == 2);
+  CHECK_THAT(r.err, Catch::Contains(trace) && Catch::Contains("cut short"));
+  // Nothing to record in a replay.
+  WriteFile(trace, original);
+  r = Run(dir + "/record", {"--replay", traces, "--record", "lidar"});
+  CHECK(r.exit_code == 2);
+  CHECK_THAT(r.err, Catch::Contains("--record"));
+  // The intact trace replays.
+  r = Run(dir + "/ok", {"--replay", traces});
+  INFO(r.err);
+  CHECK(r.exit_code == 0);
+}
