@@ -141,12 +141,27 @@ core::Json SensingPart(const Scenario& s) {
   return j;
 }
 
+// The running program's bytes: any rebuild makes new keys, so no binary
+// replays what another one sensed (the git hash alone is fixed at
+// configure time and misses uncommitted changes).
+const std::string& ProgramFingerprint() {
+  static const std::string fingerprint = [] {
+    try {
+      return core::Sha256FileHex("/proc/self/exe");
+    } catch (const std::exception&) {
+      return std::string("unknown");
+    }
+  }();
+  return fingerprint;
+}
+
 }  // namespace
 
 std::string SensingKey(const Scenario& s, const std::string& encoders) {
   core::Json k = core::Json::object();
   k["trace_version"] = kSensingTraceVersion;
   k["uavsim"] = std::string(Version()) + " " + GitHash();
+  k["program_sha256"] = ProgramFingerprint();
   k["scenario"] = SensingPart(s);
   k["encoders"] = encoders;
   if (!s.world.city.path.empty()) {

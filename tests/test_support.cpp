@@ -263,4 +263,9 @@ std::pair<int, int> PngSize(const std::string& path) {
   return {be32(16), be32(20)};
 }
 
+core::Json WithoutWallClock(core::Json j) {
+  for (const char* k : {"wall_s", "realtime_factor", "profile_s", "started_utc"}) j.erase(k);
+  return j;
+}
+
 }  // namespace uavsim::testing

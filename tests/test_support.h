@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/json_io.h"
 #include "core/world_geometry.h"
 
 namespace uavsim::testing {
@@ -99,5 +100,10 @@ core::TriangleMesh BoxMesh(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi,
 
 // The what() of the core::ConfigError that `f` throws, or "" if none.
 std::string ConfigErrorOf(const std::function<void()>& f);
+
+// A run's manifest.json or metrics.json without its wall-clock fields
+// (wall_s, realtime_factor, profile_s, started_utc): what two runs of the
+// same scenario and seed must share.
+core::Json WithoutWallClock(core::Json j);
 
 }  // namespace uavsim::testing

@@ -190,7 +190,9 @@ struct TracePlan {
   std::vector<std::optional<std::size_t>> after;
 };
 
-// The sensing key of every point (the model's fingerprint once per model).
+// The sensing key of every point (the model's fingerprint once per model);
+// empty for a point whose model does not resolve: it senses by itself and
+// fails as it runs, costing that point only.
 std::vector<std::string> SensingKeys(const SweepSpec& spec) {
   std::map<std::string, std::string> fingerprints;  // pipeline as JSON -> fingerprint
   std::vector<std::string> keys;
@@ -198,9 +200,22 @@ std::vector<std::string> SensingKeys(const SweepSpec& spec) {
     const Scenario s = spec.PointScenario(i);
     const std::string pipeline = ResolvedJson(s).at("pipeline").dump() + "@" + s.base_dir;
     auto it = fingerprints.find(pipeline);
-    if (it == fingerprints.end())
-      it = fingerprints.emplace(pipeline, EncoderFingerprint(s, spec.file)).first;
-    keys.push_back(SensingKey(s, it->second));
+    if (it == fingerprints.end()) {
+      std::string fingerprint;
+      try {
+        fingerprint = EncoderFingerprint(s, spec.file);
+      } catch (const std::exception&) {
+        // left empty: no key
+      }
+      it = fingerprints.emplace(pipeline, fingerprint).first;
+    }
+    std::string key;
+    try {
+      if (!it->second.empty()) key = SensingKey(s, it->second);
+    } catch (const std::exception&) {
+      // an unreadable city mesh: no key either
+    }
+    keys.push_back(key);
   }
   return keys;
 }
@@ -218,7 +233,8 @@ TracePlan PlanTraces(const SweepSpec& spec, const SweepOptions& o,
   plan.sweep_record = fs::absolute(fs::path(o.out_dir) / "sweep.json").string();
   plan.key = SensingKeys(spec);
   std::map<std::string, std::vector<std::size_t>> groups;
-  for (std::size_t i : queue) groups[plan.key[i]].push_back(i);
+  for (std::size_t i : queue)
+    if (!plan.key[i].empty()) groups[plan.key[i]].push_back(i);
   for (const auto& [key, points] : groups) {
     std::error_code ec;
     if (points.size() < 2 || fs::exists(SensingTracePath(plan.dir, key), ec)) continue;
@@ -238,7 +254,8 @@ std::deque<std::size_t> LeadersFirst(std::deque<std::size_t> queue, const TraceP
 // one if it leads its group; neither when DIR is not on this host.
 void WireTraces(const TracePlan& plan, std::size_t i, RunOptions& o) {
   std::error_code ec;
-  if (plan.dir.empty() || !fs::is_regular_file(plan.sweep_record, ec)) return;
+  if (plan.dir.empty() || plan.key[i].empty() || !fs::is_regular_file(plan.sweep_record, ec))
+    return;
   if (fs::is_regular_file(SensingTracePath(plan.dir, plan.key[i]), ec))
     o.replay_dir = plan.dir;
   else if (plan.writes[i])

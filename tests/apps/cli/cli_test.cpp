@@ -23,6 +23,7 @@ using uavsim::core::Json;
 using uavsim::testing::ReadFile;
 using uavsim::testing::RunCli;
 using uavsim::testing::TempDir;
+using uavsim::testing::WithoutWallClock;
 using uavsim::testing::WriteFile;
 
 namespace {
@@ -32,11 +33,6 @@ std::size_t CountLines(const std::string& s) {
   return static_cast<std::size_t>(std::count(s.begin(), s.end(), '\n'));
 }
 
-// The run files with the wall-clock fields removed.
-Json WithoutWallClock(Json j) {
-  for (const char* k : {"wall_s", "realtime_factor", "profile_s", "started_utc"}) j.erase(k);
-  return j;
-}
 }  // namespace
 
 TEST_CASE("CLI: --version, --help and every subcommand's --help", "[sim][slow]") {

@@ -15,16 +15,12 @@ using uavsim::core::Json;
 using uavsim::testing::ReadFile;
 using uavsim::testing::RunCli;
 using uavsim::testing::TempDir;
+using uavsim::testing::WithoutWallClock;
 using uavsim::testing::WriteFile;
 
 namespace {
 
 const std::string kDefault = std::string(UAVSIM_SOURCE_DIR) + "/scenarios/default.json";
-
-Json WithoutWallClock(Json j) {
-  for (const char* k : {"wall_s", "realtime_factor", "profile_s", "started_utc"}) j.erase(k);
-  return j;
-}
 
 std::vector<std::string> Files(const std::string& root) {
   std::vector<std::string> f;

@@ -33,6 +33,7 @@ using uavsim::testing::ReadFile;
 using uavsim::testing::RunCli;
 using uavsim::testing::RunProgram;
 using uavsim::testing::TempDir;
+using uavsim::testing::WithoutWallClock;
 using uavsim::testing::WriteFile;
 
 namespace {
@@ -112,12 +113,6 @@ std::vector<std::string> FileList(const std::string& root) {
     if (e.is_regular_file()) files.push_back(fs::relative(e.path(), root).string());
   std::sort(files.begin(), files.end());
   return files;
-}
-
-// A run file with the wall-clock fields removed.
-Json WithoutWallClock(Json j) {
-  for (const char* k : {"wall_s", "realtime_factor", "profile_s", "started_utc"}) j.erase(k);
-  return j;
 }
 
 // Two sweep folders hold the same results: the same files (sweep.json, the
