@@ -10,6 +10,7 @@
 #include <boost/random/normal_distribution.hpp>
 #include <cmath>
 #include <complex>
+#include <cstring>
 #include <limits>
 #include <mutex>
 #include <numeric>
@@ -422,7 +423,30 @@ struct FmcwRadar::Echo {
   double range_m = 0.0;
   double radial_velocity_mps = 0.0;
   Eigen::Vector3d u_R = Eigen::Vector3d::UnitX();
-  double snr = 0.0;  // |a|^2
+  double snr = 0.0;           // |a|^2
+  bool static_world = false;  // from the static world (not a moving object or its multipath)
+
+  // The same bits (what the sums are made of).
+  bool SameAs(const Echo& o) const {
+    return std::memcmp(&range_m, &o.range_m, sizeof range_m) == 0 &&
+           std::memcmp(u_R.data(), o.u_R.data(), 3 * sizeof(double)) == 0 &&
+           std::memcmp(&snr, &o.snr, sizeof snr) == 0 && static_world == o.static_world;
+  }
+};
+
+// The static world's share of the IF cube (issue 44): the static echoes are
+// the first of their velocity group (zero; VelocityGroups' sort is stable
+// and the static world comes first among the scatterers), so each
+// antenna's fast-time sum of the group begins with their sum, made in the
+// same order whatever follows. Kept from the last frame with the echoes it
+// was made of; a frame whose static echoes are the same bits (the weather
+// and what moving objects hide unchanged) starts from it: the same bits as
+// summing them again.
+struct FmcwRadar::StaticSums {
+  std::mutex mutex;
+  std::vector<Echo> echoes;       // in sum order
+  std::vector<float> s_re, s_im;  // [antenna * padded + sample]
+  std::size_t hits = 0;           // frames that used it
 };
 
 // The coarse grid's hits against the static world alone, made at the first
@@ -576,6 +600,7 @@ FmcwRadar::FmcwRadar(const FmcwRadarConfig& config, RaycastScene& scene)
   }
   rain_fft_ = std::make_unique<RainFft>(c.chirps_per_frame, c.adc_samples);
   cache_ = std::make_unique<GridCache>();
+  static_sums_ = std::make_unique<StaticSums>();
 }
 
 FmcwRadar::~FmcwRadar() = default;
@@ -834,8 +859,8 @@ std::vector<FmcwRadar::Echo> FmcwRadar::EchoesOf(const std::vector<Scatterer>& s
     const double r = d.norm();
     if (!(r >= kMinRangeM && r < max_range_m_) || !(s.rcs_m2 > 0.0)) continue;
     const Eigen::Vector3d u_W = d / r;
-    echoes.push_back(
-        {r, s.velocity_mps.dot(u_W), R_RW_ * u_W, SnrPerSample(s.rcs_m2, r, rain_mm_h)});
+    echoes.push_back({r, s.velocity_mps.dot(u_W), R_RW_ * u_W, SnrPerSample(s.rcs_m2, r, rain_mm_h),
+                      s.object == 0 && !s.multipath});
   }
   return echoes;
 }
@@ -856,7 +881,8 @@ std::vector<std::size_t> FmcwRadar::VelocityGroups(const std::vector<Echo>& echo
 }
 
 void FmcwRadar::FillEchoFactors(const std::vector<Echo>& echoes,
-                                const std::vector<std::size_t>& order, SampleFactors& f) const {
+                                const std::vector<std::size_t>& order, const StaticPrefix& prefix,
+                                SampleFactors& f) const {
   const FmcwRadarConfig& c = config_;
   const int nx = c.nx, ny = c.ny;
   const int antennas = nx * ny;
@@ -879,6 +905,7 @@ void FmcwRadar::FillEchoFactors(const std::vector<Echo>& echoes,
       tbb::blocked_range<std::size_t>(0, k_count, 64),
       [&](const tbb::blocked_range<std::size_t>& range) {
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
+          if (prefix.cached && i >= prefix.begin && i < prefix.begin + prefix.count) continue;
           const Echo& e = echoes[order[i]];
           // f_b = 2 K R / c
           const double f_b = 2.0 * slope_hz_per_s_ * e.range_m / kSpeedOfLight_mps;
@@ -931,7 +958,8 @@ void FmcwRadar::FillDopplerPhasors(const std::vector<Echo>& echoes,
 }
 
 void FmcwRadar::SumSignals(const SampleFactors& f, const std::vector<std::size_t>& group_begin,
-                           std::uint64_t frame_key, RadarCube& cube) const {
+                           const StaticPrefix& prefix, std::uint64_t frame_key,
+                           RadarCube& cube) const {
   const FmcwRadarConfig& c = config_;
   const int ns = c.adc_samples, nc = c.chirps_per_frame;
   const int antennas = c.nx * c.ny;
@@ -949,8 +977,8 @@ void FmcwRadar::SumSignals(const SampleFactors& f, const std::vector<std::size_t
   tbb::parallel_for(0, antennas, [&](int ant) {
     // Fast-time sum of each group at this antenna.
     std::vector<float> s_re(groups * padded, 0.0f), s_im(groups * padded, 0.0f);
-    for (std::size_t g = 0; g < groups; ++g) {
-      for (std::size_t i = group_begin[g]; i < group_begin[g + 1]; ++i) {
+    const auto accumulate = [&](std::size_t g, std::size_t from, std::size_t to) {
+      for (std::size_t i = from; i < to; ++i) {
         const float er = e_re[i * antennas + ant], ei = e_im[i * antennas + ant];
         for (int q = 0; q < blocks; ++q) {
           const float ar = a_re[i * blocks + q], ai = a_im[i * blocks + q];
@@ -959,6 +987,26 @@ void FmcwRadar::SumSignals(const SampleFactors& f, const std::vector<std::size_t
                           &s_im[g * padded + q * kFastBlock]);
         }
       }
+    };
+    const std::size_t kept = static_cast<std::size_t>(ant) * padded;
+    for (std::size_t g = 0; g < groups; ++g) {
+      std::size_t from = group_begin[g];
+      if (prefix.count > 0 && g == prefix.group) {
+        from += prefix.count;
+        float* sr = &s_re[g * padded];
+        float* si = &s_im[g * padded];
+        if (prefix.cached) {
+          std::copy_n(&static_sums_->s_re[kept], padded, sr);
+          std::copy_n(&static_sums_->s_im[kept], padded, si);
+        } else {
+          accumulate(g, group_begin[g], from);
+          if (static_cache_) {
+            std::copy_n(sr, padded, &static_sums_->s_re[kept]);
+            std::copy_n(si, padded, &static_sums_->s_im[kept]);
+          }
+        }
+      }
+      accumulate(g, from, group_begin[g + 1]);
     }
     std::vector<float> row_re(padded), row_im(padded);
     boost::random::normal_distribution<float> normal(0.0f, static_cast<float>(std::sqrt(0.5)));
@@ -986,6 +1034,30 @@ void FmcwRadar::SumSignals(const SampleFactors& f, const std::vector<std::size_t
   });
 }
 
+FmcwRadar::StaticPrefix FmcwRadar::FindStaticPrefix(const std::vector<Echo>& echoes,
+                                                    const std::vector<std::size_t>& order,
+                                                    const std::vector<std::size_t>& group_begin) {
+  StaticPrefix p;
+  const std::size_t count = static_cast<std::size_t>(
+      std::count_if(echoes.begin(), echoes.end(), [](const Echo& e) { return e.static_world; }));
+  std::size_t first = 0;
+  while (first < order.size() && !echoes[order[first]].static_world) ++first;
+  if (count == 0 || first + count > order.size()) return p;
+  const auto g = std::upper_bound(group_begin.begin(), group_begin.end(), first) - 1;
+  if (*g != first || *(g + 1) < first + count) return p;  // not the lead of its group
+  for (std::size_t j = first; j < first + count; ++j)
+    if (!echoes[order[j]].static_world) return p;
+  p.group = static_cast<std::size_t>(g - group_begin.begin());
+  p.begin = first;
+  p.count = count;
+  return p;
+}
+
+std::size_t FmcwRadar::static_sum_hits() const {
+  const std::lock_guard<std::mutex> lock(static_sums_->mutex);
+  return static_sums_->hits;
+}
+
 RadarCube FmcwRadar::Synthesize(const std::vector<Scatterer>& scatterers,
                                 const core::WeatherConfig& weather, core::RngStream& noise) const {
   const FmcwRadarConfig& c = config_;
@@ -997,13 +1069,32 @@ RadarCube FmcwRadar::Synthesize(const std::vector<Scatterer>& scatterers,
   // chirps: the static world costs one fast-time row per antenna.
   std::vector<std::size_t> order;
   const std::vector<std::size_t> group_begin = VelocityGroups(echoes, order);
+  StaticPrefix prefix = FindStaticPrefix(echoes, order, group_begin);
+  StaticSums& kept = *static_sums_;
+  const std::lock_guard<std::mutex> lock(kept.mutex);
+  if (static_cache_ && prefix.count > 0) {
+    prefix.cached = kept.echoes.size() == prefix.count;
+    for (std::size_t j = 0; prefix.cached && j < prefix.count; ++j)
+      prefix.cached = echoes[order[prefix.begin + j]].SameAs(kept.echoes[j]);
+    if (!prefix.cached) {
+      const std::size_t padded =
+          static_cast<std::size_t>((c.adc_samples + kFastBlock - 1) / kFastBlock) * kFastBlock;
+      kept.echoes.clear();
+      for (std::size_t j = 0; j < prefix.count; ++j)
+        kept.echoes.push_back(echoes[order[prefix.begin + j]]);
+      kept.s_re.assign(static_cast<std::size_t>(c.nx * c.ny) * padded, 0.0f);
+      kept.s_im.assign(kept.s_re.size(), 0.0f);
+    }
+    kept.hits += prefix.cached;
+  }
+
   SampleFactors factors;
-  FillEchoFactors(echoes, order, factors);
+  FillEchoFactors(echoes, order, prefix, factors);
   FillDopplerPhasors(echoes, order, group_begin, factors);
 
   RadarCube cube;
   cube.Resize(c.adc_samples, c.chirps_per_frame, c.nx, c.ny);
-  SumSignals(factors, group_begin, frame_key, cube);
+  SumSignals(factors, group_begin, prefix, frame_key, cube);
   if (weather.rain_mm_h > 0.0 && c.rain_clutter) AddRainClutter(weather.rain_mm_h, frame_key, cube);
   return cube;
 }

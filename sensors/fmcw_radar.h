@@ -238,6 +238,13 @@ class FmcwRadar {
   // Rays the last FindScatterers cast: coarse rays re-cast (all of them
   // without the cache) and refined rays. 0 before the first.
   std::size_t last_cast_rays() const;
+  // The same switch keeps the static world's share of the IF cube: each
+  // antenna's fast-time sum of the static echoes (which lead the
+  // zero-velocity group) is kept with the echoes it was made of, and a
+  // frame whose static echoes are the same bits (same weather, nothing new
+  // hidden by a moving object) starts from it. The cube is the same, bit
+  // for bit, with the switch on or off. Frames that used the kept sums so far:
+  std::size_t static_sum_hits() const;
 
   double wavelength_m() const { return lambda_m_; }
   double slope_hz_per_s() const { return slope_hz_per_s_; }
@@ -280,15 +287,27 @@ class FmcwRadar {
   // elements; per group: chirps); the antennas' signals and thermal noise
   // into the cube.
   struct SampleFactors;
+  struct StaticSums;
+  // Where the static echoes lie in sum order: the first `count` echoes of
+  // velocity group `group`, which begins at `begin` (count 0: nowhere to
+  // cache), and whether the kept sums are theirs.
+  struct StaticPrefix {
+    std::size_t group = 0, begin = 0, count = 0;
+    bool cached = false;
+  };
+  static StaticPrefix FindStaticPrefix(const std::vector<Echo>& echoes,
+                                       const std::vector<std::size_t>& order,
+                                       const std::vector<std::size_t>& group_begin);
   std::vector<Echo> EchoesOf(const std::vector<Scatterer>& scatterers, double rain_mm_h) const;
   static std::vector<std::size_t> VelocityGroups(const std::vector<Echo>& echoes,
                                                  std::vector<std::size_t>& order);
+  // Echoes of a cached static prefix get no factors (their sums are kept).
   void FillEchoFactors(const std::vector<Echo>& echoes, const std::vector<std::size_t>& order,
-                       SampleFactors& f) const;
+                       const StaticPrefix& prefix, SampleFactors& f) const;
   void FillDopplerPhasors(const std::vector<Echo>& echoes, const std::vector<std::size_t>& order,
                           const std::vector<std::size_t>& group_begin, SampleFactors& f) const;
   void SumSignals(const SampleFactors& f, const std::vector<std::size_t>& group_begin,
-                  std::uint64_t frame_key, RadarCube& cube) const;
+                  const StaticPrefix& prefix, std::uint64_t frame_key, RadarCube& cube) const;
   struct RainFft;  // the FFTW plan of the rain field (FFTW stays private to sensors/)
   void AddRainClutter(double rain_mm_h, std::uint64_t frame_key, RadarCube& cube) const;
 
@@ -307,6 +326,7 @@ class FmcwRadar {
   std::vector<RayCell> grid_;
   std::unique_ptr<RainFft> rain_fft_;
   std::unique_ptr<GridCache> cache_;
+  std::unique_ptr<StaticSums> static_sums_;
   bool static_cache_ = true;
 };
 
