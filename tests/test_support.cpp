@@ -5,6 +5,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
@@ -261,6 +262,14 @@ std::pair<int, int> PngSize(const std::string& path) {
     return v;
   };
   return {be32(16), be32(20)};
+}
+
+std::vector<std::string> FileList(const std::string& root) {
+  std::vector<std::string> files;
+  for (const auto& e : std::filesystem::recursive_directory_iterator(root))
+    if (e.is_regular_file()) files.push_back(std::filesystem::relative(e.path(), root).string());
+  std::sort(files.begin(), files.end());
+  return files;
 }
 
 core::Json WithoutWallClock(core::Json j) {

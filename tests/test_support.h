@@ -101,6 +101,9 @@ core::TriangleMesh BoxMesh(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi,
 // The what() of the core::ConfigError that `f` throws, or "" if none.
 std::string ConfigErrorOf(const std::function<void()>& f);
 
+// The relative paths of the regular files under `root`, sorted.
+std::vector<std::string> FileList(const std::string& root);
+
 // A run's manifest.json or metrics.json without its wall-clock fields
 // (wall_s, realtime_factor, profile_s, started_utc): what two runs of the
 // same scenario and seed must share.

@@ -12,6 +12,7 @@
 
 namespace fs = std::filesystem;
 using uavsim::core::Json;
+using uavsim::testing::FileList;
 using uavsim::testing::ReadFile;
 using uavsim::testing::RunCli;
 using uavsim::testing::TempDir;
@@ -22,20 +23,12 @@ namespace {
 
 const std::string kDefault = std::string(UAVSIM_SOURCE_DIR) + "/scenarios/default.json";
 
-std::vector<std::string> Files(const std::string& root) {
-  std::vector<std::string> f;
-  for (const auto& e : fs::recursive_directory_iterator(root))
-    if (e.is_regular_file()) f.push_back(fs::relative(e.path(), root).string());
-  std::sort(f.begin(), f.end());
-  return f;
-}
-
 // Every file of `a` is in `b`, equal byte for byte but for the wall-clock
 // fields and report.html (which shows the wall times).
 void CheckSameRun(const std::string& a, const std::string& b) {
-  const auto files = Files(a);
+  const auto files = FileList(a);
   REQUIRE(files.size() > 8);
-  CHECK(Files(b) == files);
+  CHECK(FileList(b) == files);
   for (const std::string& f : files) {
     INFO(f);
     if (!fs::exists(b + "/" + f) || f == "report.html") continue;

@@ -28,6 +28,7 @@ namespace fs = std::filesystem;
 using uavsim::core::Json;
 using uavsim::testing::Background;
 using uavsim::testing::CliResult;
+using uavsim::testing::FileList;
 using uavsim::testing::FindOnPath;
 using uavsim::testing::ReadFile;
 using uavsim::testing::RunCli;
@@ -104,15 +105,6 @@ void CheckPointsWhole(const std::string& dir) {
       INFO(p << "/" << f);
       CHECK(fs::is_regular_file(fs::path(dir) / "points" / p / f));
     }
-}
-
-// The relative paths of the regular files under `root`, sorted.
-std::vector<std::string> FileList(const std::string& root) {
-  std::vector<std::string> files;
-  for (const auto& e : fs::recursive_directory_iterator(root))
-    if (e.is_regular_file()) files.push_back(fs::relative(e.path(), root).string());
-  std::sort(files.begin(), files.end());
-  return files;
 }
 
 // Two sweep folders hold the same results: the same files (sweep.json, the
