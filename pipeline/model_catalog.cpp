@@ -256,7 +256,7 @@ std::map<std::string, std::unique_ptr<ScriptedEdge>> LoadScriptedEdges(const Cat
 
 bool NeedsTrainedModel(const PipelineConfig& p) {
   const auto& m = p.methods;
-  if (!p.scripted.empty()) return true;  // they run on the model's latents
+  if (!p.scripted.empty() || !p.hosted.empty()) return true;  // they run on the model's latents
   return std::any_of(m.begin(), m.end(), [](const std::string& method) {
     return !MethodOf(method).learned.empty() || method == "uavloc_anchored";
   });

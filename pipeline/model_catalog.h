@@ -41,7 +41,7 @@ struct CatalogScenario {
 };
 
 // Whether the scenario runs a method that needs a trained model (uavloc and
-// its variants and subsets, uavloc_anchored, TorchScript methods: they run
+// its variants and subsets, uavloc_anchored, TorchScript and Python methods: they run
 // on the model's latents).
 bool NeedsTrainedModel(const PipelineConfig& p);
 

@@ -58,6 +58,12 @@ const ScriptedMethod* PipelineConfig::FindScripted(const std::string& name) cons
   return nullptr;
 }
 
+const HostedMethod* PipelineConfig::FindHosted(const std::string& name) const {
+  for (const HostedMethod& h : hosted)
+    if (h.name == name) return &h;
+  return nullptr;
+}
+
 namespace {
 
 // A scripted method's name: letters, digits and _ (it names columns and
@@ -69,8 +75,39 @@ bool ValidScriptedName(const std::string& name) {
   return !ParseMethod(name);
 }
 
-// /pipeline/methods: each entry a method's name or a scripted method's
-// object; no name twice.
+// A /pipeline/methods entry that is an object: a TorchScript method
+// {"type": "torchscript", "name", "edge"} or a hosted one {"type": "python",
+// "name", "history_windows"}. Returns its name.
+std::string ReadMethodObject(const core::Json& e, const std::string& file, const std::string& p,
+                             PipelineConfig& c) {
+  std::string type = "torchscript", name;
+  std::string edge;
+  int history = 1;
+  core::JsonReader r(e, file, p);
+  r("type", type);
+  r("name", name);
+  r.Check(type == "torchscript" || type == "python", "type",
+          "expected \"torchscript\" or \"python\", got \"" + type + "\"");
+  r.Check(r.Has("name"), "name", "expected the method's name");
+  r.Check(name.empty() || ValidScriptedName(name), "name",
+          "expected letters, digits and _ (at most 64), not a built-in method's or a "
+          "variant's name, got \"" +
+              name + "\"");
+  if (type == "python") {
+    r("history_windows", history, Rule::Range(1, 10000));
+    r.Finish();
+    c.hosted.push_back({name, history});
+    return name;
+  }
+  r("edge", edge);
+  r.Check(!edge.empty(), "edge", "expected the path of the TorchScript file");
+  r.Finish();
+  c.scripted.push_back({name, edge});
+  return name;
+}
+
+// /pipeline/methods: each entry a method's name or a TorchScript or hosted
+// method's object; no name twice.
 void ReadMethods(const core::Json& j, const std::string& file, const std::string& at,
                  PipelineConfig& c) {
   if (!j.is_array())
@@ -83,27 +120,13 @@ void ReadMethods(const core::Json& j, const std::string& file, const std::string
                             "expected at most 256 methods, got " + std::to_string(j.size()));
   c.methods.clear();
   c.scripted.clear();
+  c.hosted.clear();
   for (std::size_t i = 0; i < j.size(); ++i) {
     const std::string p = at + "/" + std::to_string(i);
     const core::Json& e = j[i];
     std::string name;
     if (e.is_object()) {
-      std::string type = "torchscript";
-      ScriptedMethod s;
-      core::JsonReader r(e, file, p);
-      r("type", type);
-      r("name", s.name);
-      r("edge", s.edge);
-      r.Check(type == "torchscript", "type", "expected \"torchscript\", got \"" + type + "\"");
-      r.Check(r.Has("name"), "name", "expected the method's name");
-      r.Check(s.name.empty() || ValidScriptedName(s.name), "name",
-              "expected letters, digits and _ (at most 64), not a built-in method's or a "
-              "variant's name, got \"" +
-                  s.name + "\"");
-      r.Check(!s.edge.empty(), "edge", "expected the path of the TorchScript file");
-      r.Finish();
-      name = s.name;
-      c.scripted.push_back(std::move(s));
+      name = ReadMethodObject(e, file, p, c);
     } else if (e.is_string()) {
       name = e.get<std::string>();
       if (!ParseMethod(name))
@@ -148,6 +171,9 @@ void Visit(V& v, PipelineConfig& c) {
     for (const std::string& name : c.methods)
       if (const ScriptedMethod* s = c.FindScripted(name))
         list.push_back({{"type", "torchscript"}, {"name", s->name}, {"edge", s->edge}});
+      else if (const HostedMethod* h = c.FindHosted(name))
+        list.push_back(
+            {{"type", "python"}, {"name", h->name}, {"history_windows", h->history_windows}});
       else
         list.push_back(name);
     v.Raw("methods", std::move(list));

@@ -21,6 +21,17 @@ struct ScriptedMethod {
   std::string edge;
 };
 
+// A method the program embedding the simulator supplies (/pipeline/methods
+// entry {"type": "python", "name": NAME, "history_windows": L}): a Python
+// function given, at each window's deadline, what a TorchScript method is
+// given (the last L windows' latents, pipeline/edge/latent_history.h). The
+// scenario names it; `import uavsim` (apps/python) brings the function, and
+// a run without it is refused (the command line has none).
+struct HostedMethod {
+  std::string name;
+  int history_windows = 1;
+};
+
 struct PipelineConfig {
   std::string model = "default";  // "default": the model shipped for scenarios/default.json
   double window_s = 0.2;          // paper: alignment window t^w = 0.2 s
@@ -38,6 +49,9 @@ struct PipelineConfig {
   std::vector<ScriptedMethod> scripted;
   // The scripted method named `name`, or null.
   const ScriptedMethod* FindScripted(const std::string& name) const;
+  // The entries of `methods` that a host program supplies (Python methods).
+  std::vector<HostedMethod> hosted;
+  const HostedMethod* FindHosted(const std::string& name) const;
   // uavloc_anchored answers from its first window with a track of its anchor
   // filter (pipeline/edge/edge_localizer.h), as ekf and anchor_track from
   // their first confirmed track; false: from its first window with any data

@@ -20,28 +20,34 @@ bool Runs(const Scenario& s, const std::string& method) {
 
 // The scenario's methods in the order the downlink scores them (rate_snr.csv
 // and the report): uavloc, uavloc_anchored, anchor_track, ekf, then the
-// other learned methods and the TorchScript ones, each by name.
+// other learned methods, the TorchScript ones and the Python ones, each by
+// name.
 std::vector<std::string> MethodOrder(const Scenario& s) {
   std::vector<std::string> order;
   for (const char* fixed : {"uavloc", "uavloc_anchored", "anchor_track", "ekf"})
     if (Runs(s, fixed)) order.push_back(fixed);
-  std::set<std::string> learned, scripted;
+  std::set<std::string> learned, scripted, hosted;
   for (const std::string& method : s.pipeline.methods) {
     if (s.pipeline.FindScripted(method))
       scripted.insert(method);
+    else if (s.pipeline.FindHosted(method))
+      hosted.insert(method);
     else if (std::find(order.begin(), order.end(), method) == order.end())
       learned.insert(method);
   }
   order.insert(order.end(), learned.begin(), learned.end());
   order.insert(order.end(), scripted.begin(), scripted.end());
+  order.insert(order.end(), hosted.begin(), hosted.end());
   return order;
 }
 
 std::vector<std::unique_ptr<pipeline::LocalizationMethod>> MakeMethods(
-    const Scenario& s, pipeline::ModelCatalog& catalog) {
+    const Scenario& s, pipeline::ModelCatalog& catalog, const HostedMethods* hosted) {
   std::vector<std::unique_ptr<pipeline::LocalizationMethod>> methods;
   for (const std::string& name : MethodOrder(s)) {
-    if (name == "ekf")
+    if (const pipeline::HostedMethod* entry = s.pipeline.FindHosted(name))
+      methods.push_back(hosted->at(name)(*entry, s.pipeline.latent_dim, s.pipeline.window_s));
+    else if (name == "ekf")
       methods.push_back(pipeline::MakeEkfMethod(MakeEkf(s)));
     else if (name == "anchor_track")
       methods.push_back(pipeline::MakeAnchorTrackMethod(s.pipeline.window_s));
@@ -109,7 +115,9 @@ std::string EdgeServer::encoder_fingerprint() const {
   return catalog_ ? FingerprintOf(*catalog_) : "none";
 }
 
-void CheckTrainedModel(const Scenario& s, const std::string& file, bool quiet) {
+void CheckTrainedModel(const Scenario& s, const std::string& file, bool quiet,
+                       const HostedMethods* hosted) {
+  CheckHostedMethods(s, file, hosted);
   pipeline::ModelCatalog catalog(CatalogOf(s, file));
   if (!catalog.needs_model()) return;
   pipeline::InitTorch(1, s.seed);
@@ -118,7 +126,7 @@ void CheckTrainedModel(const Scenario& s, const std::string& file, bool quiet) {
   // Nothing vouches for such a folder's files (a truncated radar.pt passed
   // validate, issue 43): they are checked as the run reads them, by
   // loading every one the run loads.
-  { const EdgeServer loaded(s, file, /*quiet=*/true, /*methods=*/true); }
+  { const EdgeServer loaded(s, file, /*quiet=*/true, /*methods=*/true, hosted); }
   if (!quiet)
     for (const std::string& p : catalog.unchecked())
       std::cerr << file << ": /pipeline/model: warning: " << p << ": its folder has no "
@@ -132,17 +140,18 @@ std::string CheckEncoderModel(const Scenario& s, const std::string& file, const 
 }
 
 EdgeServer::EdgeServer(const Scenario& s, const std::string& scenario_file, bool quiet,
-                       bool methods)
+                       bool methods, const HostedMethods* hosted)
     : scenario_(s),
       receiver_(s.pipeline.window_s, s.pipeline.late_allowance_s),
       window_ns_(core::Seconds(s.pipeline.window_s)) {
   if (!methods) return;
+  CheckHostedMethods(s, scenario_file, hosted);
   catalog_ = std::make_unique<pipeline::ModelCatalog>(CatalogOf(s, scenario_file));
   if (catalog_->needs_model()) {
     pipeline::InitTorch(1, s.seed);
     catalog_->Load(quiet);
   }
-  methods_ = MakeMethods(s, *catalog_);
+  methods_ = MakeMethods(s, *catalog_, HostedOrProcess(hosted));
   for (const auto& m : methods_) {
     needs_.arrivals |= m->needs().arrivals;
     needs_.latents |= m->needs().latents;
@@ -200,6 +209,10 @@ bool EdgeServer::OnArrival(const channel::Message& m, core::SimTime t_arrival) {
   }
   if (needs_.anchors && anchor.kind != pipeline::GeometricAnchor::Kind::kNone)
     pending_[k].anchors[modality].push_back(anchor);
+  if (keep_arrivals_)
+    pending_records_[k].push_back({content.node_id, m.modality, t_capture_s, content.latent,
+                                   content.camera ? pipeline::AnchorOf(*content.camera)
+                                                  : pipeline::AnchorOf(*content.points)});
   return true;
 }
 
@@ -210,6 +223,12 @@ std::map<std::string, Eigen::Vector3d> EdgeServer::EstimateWindow(std::int64_t t
   // Windows up to k are done (an arrival stamped exactly at a passed
   // deadline would otherwise linger).
   pending_.erase(pending_.begin(), pending_.upper_bound(k));
+  if (keep_arrivals_) {
+    last_arrivals_.clear();
+    if (auto it = pending_records_.find(k); it != pending_records_.end())
+      last_arrivals_ = std::move(it->second);
+    pending_records_.erase(pending_records_.begin(), pending_records_.upper_bound(k));
+  }
   w.k = k;
   w.t_end_s = t_s;
   w.latents.window = k;

@@ -35,6 +35,7 @@
 #include "pipeline/localization_method.h"
 #include "pipeline/model_catalog.h"
 #include "pipeline/node/node_encoder.h"
+#include "sim/hosted_method.h"
 #include "sim/scenario.h"
 #include "sim/sensing_node.h"
 
@@ -51,8 +52,10 @@ pipeline::CatalogScenario CatalogOf(const Scenario& s, const std::string& file);
 // checksums.sha256; a folder without one is loaded as the run loads it,
 // with a warning on stderr unless `quiet`. Nothing when no method needs a
 // model. Throws core::ConfigError naming `file` and the scenario's pointer
-// (or the model's file that does not load).
-void CheckTrainedModel(const Scenario& s, const std::string& file, bool quiet = false);
+// (or the model's file that does not load), or a Python method without its
+// function in `hosted` (sim/hosted_method.h).
+void CheckTrainedModel(const Scenario& s, const std::string& file, bool quiet = false,
+                       const HostedMethods* hosted = nullptr);
 
 // A model folder (or its manifest; "default": the shipped model) whose node
 // encoders a command runs on the scenario's observations outside the loop
@@ -84,8 +87,11 @@ class EdgeServer {
   // accounts. Throws core::ConfigError naming `scenario_file` and
   // /pipeline/model (or /pipeline/latent_dim, /pipeline/window_s) when the
   // model is missing or does not fit the scenario; warns on stderr (unless
-  // quiet) when it was trained for another world or node layout.
-  EdgeServer(const Scenario& scenario, const std::string& scenario_file, bool quiet, bool methods);
+  // quiet) when it was trained for another world or node layout. `hosted`:
+  // the Python methods' factories (null: none; a scenario that lists one
+  // without its factory is a ConfigError).
+  EdgeServer(const Scenario& scenario, const std::string& scenario_file, bool quiet, bool methods,
+             const HostedMethods* hosted = nullptr);
   ~EdgeServer();
 
   // The uplinks' side (the nodes report what they send to receiver()
@@ -97,6 +103,19 @@ class EdgeServer {
   // At the deadline of window k = tick + 1, whose end is t_s: each method's
   // estimate of the target (world ENU, metres), absent where it has none yet.
   std::map<std::string, Eigen::Vector3d> EstimateWindow(std::int64_t tick, double t_s);
+
+  // What reached the edge on time, kept per window for a host that steps
+  // the run (apps/python's environment): off by default.
+  struct ArrivalRecord {
+    std::string node_id;
+    core::Modality modality = core::Modality::kCamera;
+    double t_capture_s = 0.0;
+    std::vector<float> latent;         // empty without a model
+    pipeline::GeometricAnchor anchor;  // the node's detection (kNone: nothing found)
+  };
+  void set_keep_arrivals(bool keep) { keep_arrivals_ = keep; }
+  // The arrivals of the window EstimateWindow last estimated, in arrival order.
+  const std::vector<ArrivalRecord>& last_arrivals() const { return last_arrivals_; }
 
   channel::EdgeReceiver& receiver() { return receiver_; }
   const channel::EdgeReceiver& receiver() const { return receiver_; }
@@ -129,6 +148,9 @@ class EdgeServer {
   std::vector<std::unique_ptr<pipeline::LocalizationMethod>> methods_;
   pipeline::MethodNeeds needs_;                               // what any of them needs
   std::map<std::int64_t, pipeline::WindowArrivals> pending_;  // window k -> what arrived
+  bool keep_arrivals_ = false;
+  std::map<std::int64_t, std::vector<ArrivalRecord>> pending_records_;
+  std::vector<ArrivalRecord> last_arrivals_;
   core::WallProfile* profile_ = nullptr;
 };
 

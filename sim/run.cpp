@@ -190,8 +190,9 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
   TruthSampler truth(s, world, !o.collect);
   truth.Start(sim, t_end);
 
-  EdgeServer edge(s, o.scenario_file, o.quiet, /*methods=*/!o.collect);
+  EdgeServer edge(s, o.scenario_file, o.quiet, /*methods=*/!o.collect, o.hosted);
   edge.set_profile(&profile);
+  edge.set_keep_arrivals(static_cast<bool>(o.on_window));
   std::optional<TrainingCollector> collector;
   if (o.collect) collector.emplace(*o.collect, world, s.pipeline.window_s, t_end);
   TrainingCollector* const collecting = collector ? &*collector : nullptr;
@@ -226,6 +227,7 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
           const auto timing = core::WallProfile::Measure(&profile, "beams");
           scored = scores->Score(t_s, truth_m, estimated, world);
         }
+        if (o.on_window) o.on_window({tick + 1, t_s, &truth_m, &scored, &edge, &*scores});
         const auto timing =
             core::WallProfile::Measure(recorder->records_mcap() ? &profile : nullptr, "record");
         recorder->RecordWindow(t_s, world, scored);

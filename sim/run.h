@@ -3,6 +3,8 @@
 // (DESIGN.md: manifest.json, truth.csv, metrics.json, ...) all-or-nothing.
 #pragma once
 
+#include <Eigen/Core>
+#include <functional>
 #include <iosfwd>
 #include <map>
 #include <optional>
@@ -14,9 +16,26 @@
 #include "core/interrupt.h"
 #include "core/json_io.h"
 #include "pipeline/training/dataset.h"
+#include "sim/hosted_method.h"
 #include "sim/scenario.h"
 
 namespace uavsim::sim {
+
+class EdgeServer;
+class WindowScorer;
+
+// One alignment window as a host stepping the run sees it, once the window
+// is scored (its downlink channel realised): what arrived
+// (edge.last_arrivals(), when the host asked for them), each method's
+// estimate, the truth, the scorer (its downlink's last channel).
+struct WindowView {
+  std::int64_t k = 1;
+  double t_s = 0.0;  // the window's end
+  const Eigen::Vector3d* truth_m = nullptr;
+  const std::map<std::string, Eigen::Vector3d>* estimated = nullptr;  // as scored
+  const EdgeServer* edge = nullptr;
+  const WindowScorer* scorer = nullptr;
+};
 
 struct RunOptions {
   std::string out_dir;  // final run directory
@@ -39,6 +58,12 @@ struct RunOptions {
   // for byte; refused with a recording of sensor frames or `collect`).
   std::string trace_dir;
   std::string replay_dir;
+  // The Python methods' factories (sim/hosted_method.h; null: none).
+  const HostedMethods* hosted = nullptr;
+  // Called at every window once it is scored (apps/python's environment
+  // waits there for its agent); the edge keeps each window's arrivals for
+  // it. Changes no output.
+  std::function<void(const WindowView&)> on_window;
 };
 
 struct RunSummary {

@@ -4,7 +4,10 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <filesystem>
+
+#include "core/error.h"
 
 namespace uavsim::sim {
 namespace {
@@ -88,6 +91,19 @@ double FreeBytesFor(const std::string& path) {
   struct statvfs v {};
   if (p.empty() || ::statvfs(p.c_str(), &v) != 0) return -1.0;
   return static_cast<double>(v.f_bavail) * static_cast<double>(v.f_frsize);
+}
+
+void RequireRoomToRecord(const Scenario& s, const std::vector<std::string>& record,
+                         const std::string& out_dir, const std::string& command) {
+  if (record.empty()) return;
+  const double bytes = EstimateRecordBytes(s, record);
+  const double free = FreeBytesFor(out_dir);
+  if (free < 0 || bytes <= free) return;
+  char text[256];
+  std::snprintf(text, sizeof text,
+                "%s: --record would write up to %.3g bytes; the file system of %s has %.3g free",
+                command.c_str(), bytes, out_dir.c_str(), free);
+  throw core::UsageError(text);
 }
 
 }  // namespace uavsim::sim

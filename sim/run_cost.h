@@ -25,4 +25,9 @@ double EstimateRecordBytes(const Scenario& s, const std::vector<std::string>& mo
 // parent folder); -1 if unknown.
 double FreeBytesFor(const std::string& path);
 
+// A recording that would not fit out_dir's file system is refused before
+// anything is made: core::UsageError "COMMAND: --record would write ...".
+void RequireRoomToRecord(const Scenario& s, const std::vector<std::string>& record,
+                         const std::string& out_dir, const std::string& command);
+
 }  // namespace uavsim::sim

@@ -1,7 +1,10 @@
 #include "sim/sensing_trace.h"
 
+#include <cinttypes>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <stdexcept>
 #include <type_traits>
 
@@ -141,13 +144,28 @@ core::Json SensingPart(const Scenario& s) {
   return j;
 }
 
+// The file this code was loaded from (the executable, or the Python
+// module's shared object), by the mapping that holds this function.
+std::string ProgramFile() {
+  const auto here = reinterpret_cast<std::uintptr_t>(&ProgramFile);
+  std::ifstream maps("/proc/self/maps");
+  std::string line;
+  while (std::getline(maps, line)) {
+    std::uintptr_t lo = 0, hi = 0;
+    if (std::sscanf(line.c_str(), "%" SCNxPTR "-%" SCNxPTR, &lo, &hi) != 2) continue;
+    const auto slash = line.find('/');
+    if (here >= lo && here < hi && slash != std::string::npos) return line.substr(slash);
+  }
+  return "/proc/self/exe";
+}
+
 // The running program's bytes: any rebuild makes new keys, so no binary
 // replays what another one sensed (the git hash alone is fixed at
 // configure time and misses uncommitted changes).
 const std::string& ProgramFingerprint() {
   static const std::string fingerprint = [] {
     try {
-      return core::Sha256FileHex("/proc/self/exe");
+      return core::Sha256FileHex(ProgramFile());
     } catch (const std::exception&) {
       return std::string("unknown");
     }

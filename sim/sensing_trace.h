@@ -9,8 +9,9 @@
 // (wall times aside).
 //
 // The sensing key: SHA-256 over the trace format, this build's version and
-// git hash and the running program's own bytes (any rebuild makes new
-// keys), and the resolved scenario without what cannot change sensing
+// git hash and the running program's own bytes (the executable's, or the
+// Python module's; any rebuild makes new keys), and the resolved scenario without what cannot
+// change sensing
 // (/name, /links, /base_station, /outputs, /execution, each node's
 // /uplink, /pipeline's methods and edge settings; /pipeline/model as a
 // path), plus the bytes of the city mesh and of the model folder whose

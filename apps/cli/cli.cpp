@@ -4,9 +4,11 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <iostream>
 #include <sstream>
 
 #include "core/error.h"
+#include "sim/version.h"
 
 namespace uavsim::cli {
 
@@ -128,6 +130,53 @@ std::string CommandLine(int argc, char** argv) {
 bool& Verbose() {
   static bool verbose = false;
   return verbose;
+}
+
+namespace {
+
+// `uavsim --help`: the commands from the table.
+std::string MainHelp() {
+  std::string out =
+      "uavsim: discrete-event network and sensing simulator for edge-assisted multimodal UAV "
+      "localization\n"
+      "\n"
+      "usage: uavsim COMMAND [OPTIONS]\n"
+      "\n"
+      "commands:\n";
+  for (const Command& c : Commands()) {
+    char line[256];
+    std::snprintf(line, sizeof line, "  %-26s %s\n", c.usage.c_str(), c.summary.c_str());
+    out += line;
+  }
+  return out +
+         "\n"
+         "options: --help (also after a command), --version, --quiet (every command)\n"
+         "exit codes: 0 ok, 1 failure while running, 2 bad input or usage, 130 interrupted\n";
+}
+
+}  // namespace
+
+int RunCommandLine(int argc, char** argv) {
+  if (argc < 2) {
+    std::cerr << MainHelp();
+    return kExitBadInput;
+  }
+  const std::string cmd = argv[1];
+  if (cmd == "--help" || cmd == "-h" || cmd == "help") return std::cout << MainHelp(), kExitOk;
+  if (cmd == "--version") {
+    std::cout << "uavsim " << uavsim::sim::Version();
+    if (*uavsim::sim::GitHash()) std::cout << " (" << uavsim::sim::GitHash() << ")";
+    std::cout << "\n";
+    return kExitOk;
+  }
+  for (const Command& c : Commands()) {
+    if (c.name != cmd) continue;
+    if (c.precheck) c.precheck(argc, argv);
+    const ParsedArgs a = Parse(c, argc, argv, 2);
+    if (a.Has("--help")) return std::cout << c.help(), kExitOk;
+    return c.run(a, argc, argv);
+  }
+  throw UsageError("uavsim: unknown command '" + cmd + "' (see uavsim --help)");
 }
 
 }  // namespace uavsim::cli

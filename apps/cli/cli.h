@@ -50,6 +50,12 @@ struct Command {
   void (*precheck)(int argc, char** argv) = nullptr;
 };
 
+// `uavsim ARGS...`: finds argv[1] in the table, parses its options and runs
+// it (or prints the help, the version); returns the exit code. Bad input
+// throws core::UsageError or core::ConfigError; the rest as each command
+// says. main() and the Python module (apps/python) call it.
+int RunCommandLine(int argc, char** argv);
+
 // The commands, in the order `uavsim --help` lists them.
 const std::vector<Command>& Commands();
 

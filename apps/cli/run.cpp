@@ -48,21 +48,6 @@ const char* kHelp =
     "  --quiet         no progress or summary output\n"
     "  --verbose       a failing TorchScript method's whole traceback after its line\n";
 
-// A recording that would not fit the output's file system is refused
-// before anything is made.
-void RequireRoomToRecord(const sim::Scenario& s, const sim::RunOptions& o) {
-  if (o.record.empty()) return;
-  const double bytes = sim::EstimateRecordBytes(s, o.record);
-  const double free = sim::FreeBytesFor(o.out_dir);
-  if (free < 0 || bytes <= free) return;
-  char text[256];
-  std::snprintf(text, sizeof text,
-                "uavsim run: --record would write up to %.3g bytes; the file system of %s has "
-                "%.3g free",
-                bytes, o.out_dir.c_str(), free);
-  throw UsageError(text);
-}
-
 // Where the time went, on a terminal: the three largest parts of the
 // run's profile_s (metrics.json has them all).
 void PrintTopParts(const sim::RunSummary& summary) {
@@ -114,7 +99,7 @@ int Run(const ParsedArgs& a, int, char**) {
   const sim::Scenario s = sim::LoadScenario(file, overrides);
   sim::CheckTrainedModel(s, file, a.Has("--quiet"));  // what validate checks, first
   o.out_dir = a.Value("--out").value_or("runs/" + s.name + "-s" + std::to_string(s.seed));
-  RequireRoomToRecord(s, o);
+  sim::RequireRoomToRecord(s, o.record, o.out_dir, "uavsim run");
   const auto summary = sim::RunScenario(s, o);
   if (!o.quiet) {
     std::printf("%s: %g s simulated in %.3f s (%.3gx real time); truth.csv %zu rows; frames",

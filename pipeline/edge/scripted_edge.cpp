@@ -5,13 +5,13 @@
 
 #include <algorithm>
 #include <cmath>
-#include <deque>
 #include <filesystem>
 #include <stdexcept>
 #include <utility>
 
 #include "core/error.h"
 #include "core/zip_check.h"
+#include "pipeline/edge/latent_history.h"
 
 namespace uavsim::pipeline {
 namespace {
@@ -48,45 +48,19 @@ struct ScriptedEdge::Impl {
   std::string path;
   int latent_dim = 16;
   double window_s = 0.2;
-  int history = 1;
-  std::deque<WindowInputs> windows;  // the last `history` windows, oldest first
-  std::optional<std::int64_t> last_window;
-  bool has_seen_data = false;
+  std::optional<LatentHistory> history;  // made once history_windows is read
 
-  // The model's output for the windows held (padded to `history`).
+  // The model's output for the windows held (padded to history_windows).
   torch::Tensor Forward() {
-    std::size_t frames = 1;
-    for (const WindowInputs& w : windows)
-      for (const auto& f : w.frames) frames = std::max(frames, f.size());
-    const auto L = static_cast<std::int64_t>(history), F = static_cast<std::int64_t>(frames);
-    torch::Tensor latents = torch::zeros({L, kModalityCount, F, latent_dim});
-    torch::Tensor offsets = torch::zeros({L, kModalityCount, F});
-    torch::Tensor mask = torch::zeros({L, kModalityCount, F});
-    auto lat = latents.accessor<float, 4>();
-    auto off = offsets.accessor<float, 3>();
-    auto msk = mask.accessor<float, 3>();
-    const std::int64_t first = L - static_cast<std::int64_t>(windows.size());
-    for (std::size_t i = 0; i < windows.size(); ++i) {
-      const WindowInputs& w = windows[i];
-      const std::int64_t l = first + static_cast<std::int64_t>(i);
-      const double start_s = static_cast<double>(w.window - 1) * window_s;
-      for (int m = 0; m < kModalityCount; ++m) {
-        std::vector<const LatentFrame*> sorted;
-        for (const LatentFrame& f : w.frames[static_cast<std::size_t>(m)]) sorted.push_back(&f);
-        std::stable_sort(
-            sorted.begin(), sorted.end(),
-            [](const LatentFrame* a, const LatentFrame* b) { return a->t_s < b->t_s; });
-        for (std::size_t f = 0; f < sorted.size(); ++f) {
-          for (int d = 0; d < latent_dim; ++d)
-            lat[l][m][static_cast<std::int64_t>(f)][d] =
-                sorted[f]->latent[static_cast<std::size_t>(d)];
-          off[l][m][static_cast<std::int64_t>(f)] = static_cast<float>(sorted[f]->t_s - start_s);
-          msk[l][m][static_cast<std::int64_t>(f)] = 1.0f;
-        }
-      }
-    }
+    PackedWindows p = history->Pack();
+    const std::int64_t L = p.windows, F = p.frames;
+    const auto tensor = [](std::vector<float>& data, c10::IntArrayRef shape) {
+      return torch::from_blob(data.data(), shape, torch::kFloat32).clone();
+    };
     torch::NoGradGuard no_grad;
-    const torch::jit::IValue out = module.forward({latents, offsets, mask});
+    const torch::jit::IValue out = module.forward(
+        {tensor(p.latents, {L, kModalityCount, F, p.latent_dim}),
+         tensor(p.offsets_s, {L, kModalityCount, F}), tensor(p.mask, {L, kModalityCount, F})});
     if (!out.isTensor()) throw std::runtime_error("returned no tensor");
     return out.toTensor();
   }
@@ -125,13 +99,15 @@ std::unique_ptr<ScriptedEdge> ScriptedEdge::Load(const std::string& path, int la
     throw std::invalid_argument(path + ": forward takes " +
                                 std::to_string(args.size() > 0 ? args.size() - 1 : 0) +
                                 " arguments: expected " + kSignature);
+  int history = 1;
   if (impl->module.hasattr("history_windows")) {
     const torch::jit::IValue h = impl->module.attr("history_windows");
     if (!h.isInt() || h.toInt() < 1 || h.toInt() > kMaxHistoryWindows)
       throw std::invalid_argument(path + ": history_windows must be an integer from 1 to " +
                                   std::to_string(kMaxHistoryWindows));
-    impl->history = static_cast<int>(h.toInt());
+    history = static_cast<int>(h.toInt());
   }
+  impl->history.emplace(history, latent_dim, window_s);
   torch::Tensor out;
   try {
     out = impl->Forward();
@@ -150,28 +126,12 @@ std::unique_ptr<ScriptedEdge> ScriptedEdge::Load(const std::string& path, int la
 
 std::optional<Eigen::Vector3d> ScriptedEdge::OnWindow(const WindowInputs& window) {
   Impl& s = *impl_;
-  if (s.last_window && window.window <= *s.last_window)
-    throw std::invalid_argument("ScriptedEdge::OnWindow: window " + std::to_string(window.window) +
-                                " does not come after " + std::to_string(*s.last_window));
-  for (const auto& frames : window.frames)
-    for (const LatentFrame& f : frames) {
-      if (static_cast<int>(f.latent.size()) != s.latent_dim)
-        throw std::invalid_argument("ScriptedEdge::OnWindow: a latent of " +
-                                    std::to_string(f.latent.size()) + " values, expected " +
-                                    std::to_string(s.latent_dim));
-      s.has_seen_data = true;
-    }
-  // Skipped windows are empty ones.
-  const std::int64_t from = s.last_window ? *s.last_window + 1 : window.window;
-  for (std::int64_t k = std::max(from, window.window - s.history + 1); k < window.window; ++k) {
-    WindowInputs empty;
-    empty.window = k;
-    s.windows.push_back(std::move(empty));
+  try {
+    s.history->Push(window);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("ScriptedEdge::OnWindow: ") + e.what());
   }
-  s.windows.push_back(window);
-  while (static_cast<int>(s.windows.size()) > s.history) s.windows.pop_front();
-  s.last_window = window.window;
-  if (!s.has_seen_data) return std::nullopt;
+  if (!s.history->has_seen_data()) return std::nullopt;
   torch::Tensor out;
   try {
     out = s.Forward().to(torch::kDouble).reshape({3}).contiguous();
@@ -189,7 +149,7 @@ std::optional<Eigen::Vector3d> ScriptedEdge::OnWindow(const WindowInputs& window
 ScriptedEdgeFailure::ScriptedEdgeFailure(const std::string& line, std::string traceback)
     : std::runtime_error(line), traceback_(std::move(traceback)) {}
 
-int ScriptedEdge::history_windows() const { return impl_->history; }
+int ScriptedEdge::history_windows() const { return impl_->history->history_windows(); }
 int ScriptedEdge::latent_dim() const { return impl_->latent_dim; }
 
 }  // namespace uavsim::pipeline
