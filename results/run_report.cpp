@@ -150,10 +150,16 @@ RunData Load(const std::string& dir) {
   if (d.truth) {
     const long t = d.truth->Column("t_s"), x = d.truth->Column("x_m"), y = d.truth->Column("y_m"),
                z = d.truth->Column("z_m");
+    // Several targets (a `target` column): the report follows the first,
+    // the one the methods localize.
+    const long target = d.truth->CsvFile::Column("target");
     for (std::size_t i = 0; i < d.truth->rows.size(); ++i) {
+      if (target >= 0 && d.truth->rows[i][static_cast<std::size_t>(target)] !=
+                             d.truth->rows[0][static_cast<std::size_t>(target)])
+        continue;
       d.truth_t.push_back(d.truth->Number(i, t));
       d.truth_p.emplace_back(d.truth->Number(i, x), d.truth->Number(i, y), d.truth->Number(i, z));
-      if (i > 0 && d.truth_t[i] <= d.truth_t[i - 1])
+      if (d.truth_t.size() > 1 && d.truth_t.back() <= d.truth_t[d.truth_t.size() - 2])
         throw std::invalid_argument(d.truth->name + ": line " + std::to_string(d.truth->line[i]) +
                                     ": t_s must increase");
     }
@@ -839,6 +845,16 @@ std::vector<std::vector<std::string>> DataRateRows(const RunData& d) {
   return rows;
 }
 
+// A /pipeline/methods entry as the report's table names it: "ekf", "mine
+// (TorchScript mine.pt)", "mine (Python, 10 windows)".
+std::string MethodLabel(const Json& x) {
+  if (!x.is_object()) return JsonText(x);
+  const std::string name = JsonText(x.value("name", Json(nullptr)));
+  if (x.value("type", std::string("torchscript")) == "python")
+    return name + " (Python, " + JsonText(x.value("history_windows", Json(1))) + " windows)";
+  return name + " (TorchScript " + JsonText(x.value("edge", Json(nullptr))) + ")";
+}
+
 std::vector<std::vector<std::string>> SettingsRows(const RunData& d) {
   const Json& s = d.scenario;
   std::vector<std::vector<std::string>> rows{{"setting", "value"}};
@@ -884,11 +900,7 @@ std::vector<std::vector<std::string>> SettingsRows(const RunData& d) {
                           JsonText(At(s, "/base_station/path_model")));
   std::string methods;
   if (const Json m = At(s, "/pipeline/methods"); m.is_array())
-    for (const Json& x : m)
-      methods += (methods.empty() ? "" : ", ") +
-                 (x.is_object() ? JsonText(x.value("name", Json(nullptr))) + " (TorchScript " +
-                                      JsonText(x.value("edge", Json(nullptr))) + ")"
-                                : JsonText(x));
+    for (const Json& x : m) methods += (methods.empty() ? "" : ", ") + MethodLabel(x);
   add("methods", methods);
   add("model", JsonText(At(s, "/pipeline/model")));
   add("window (s)", JsonText(At(s, "/pipeline/window_s")));

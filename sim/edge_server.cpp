@@ -70,9 +70,10 @@ pipeline::CatalogScenario CatalogOf(const Scenario& s, const std::string& file) 
 
 std::unique_ptr<pipeline::Ekf> MakeEkf(const Scenario& s) {
   pipeline::EkfConfig config = s.pipeline.ekf;
-  config.max_speed_mps = s.uavs.front().trajectory.max_speed_mps;
-  config.max_accel_mps2 = s.uavs.front().trajectory.max_accel_mps2;
-  config.target_size_m = s.uavs.front().size_m;
+  const UavConfig& target = s.uavs[FirstTarget(s)];
+  config.max_speed_mps = target.trajectory.max_speed_mps;
+  config.max_accel_mps2 = target.trajectory.max_accel_mps2;
+  config.target_size_m = target.size_m;
   auto ekf = std::make_unique<pipeline::Ekf>(config);
   for (const NodeConfig& n : s.nodes) {
     switch (n.sensor.type) {

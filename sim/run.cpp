@@ -41,26 +41,42 @@ std::string UtcNow() {
 
 const char* const kModalities[] = {"camera", "lidar", "radar"};
 
-// The target's ground truth (truth.csv), sampled on its own timer; no rows
-// when `keep` is false (training-data collection).
+// The targets' ground truth (truth.csv), sampled on its own timer; no rows
+// when `keep` is false (training-data collection). With several targets
+// (UavConfig::role) a `target` column names each row's UAV, the targets in
+// scenario order at each time; with one the file has no such column.
 class TruthSampler {
  public:
   TruthSampler(const Scenario& s, const WorldModel& world, bool keep)
-      : timer_(s.outputs.truth_rate_hz, 0.0, [this, &world, keep](std::int64_t, core::SimTime t) {
-          if (keep) AddRow(world.target().StateAt(core::ToSeconds(t)), t);
-        }) {}
+      : table_(Header(world.targets().size() > 1)),
+        timer_(s.outputs.truth_rate_hz, 0.0,
+               [this, &s, &world, keep](std::int64_t, core::SimTime t) {
+                 if (!keep) return;
+                 const double t_s = core::ToSeconds(t);
+                 if (world.targets().size() == 1) return AddRow(world.target().StateAt(t_s), t);
+                 for (std::size_t i : world.targets())
+                   AddRow(world.uav(i).StateAt(t_s), t, &s.uavs[i].id);
+               }) {}
   void Start(core::Simulator& sim, core::SimTime t_end) { timer_.Start(sim, 0, t_end); }
   const results::CsvTable& table() const { return table_; }
 
  private:
-  void AddRow(const core::KinematicState& x, core::SimTime t) {
-    using results::FormatFixed;
-    table_.AddRow({FormatFixed(core::ToSeconds(t), 6), FormatFixed(x.position_m.x(), 6),
-                   FormatFixed(x.position_m.y(), 6), FormatFixed(x.position_m.z(), 6),
-                   FormatFixed(x.velocity_mps.x(), 6), FormatFixed(x.velocity_mps.y(), 6),
-                   FormatFixed(x.velocity_mps.z(), 6)});
+  static std::vector<std::string> Header(bool targets) {
+    std::vector<std::string> h{"t_s", "x_m", "y_m", "z_m", "vx_mps", "vy_mps", "vz_mps"};
+    if (targets) h.insert(h.begin() + 1, "target");
+    return h;
   }
-  results::CsvTable table_{{"t_s", "x_m", "y_m", "z_m", "vx_mps", "vy_mps", "vz_mps"}};
+  void AddRow(const core::KinematicState& x, core::SimTime t, const std::string* target = nullptr) {
+    using results::FormatFixed;
+    std::vector<std::string> row{
+        FormatFixed(core::ToSeconds(t), 6), FormatFixed(x.position_m.x(), 6),
+        FormatFixed(x.position_m.y(), 6),   FormatFixed(x.position_m.z(), 6),
+        FormatFixed(x.velocity_mps.x(), 6), FormatFixed(x.velocity_mps.y(), 6),
+        FormatFixed(x.velocity_mps.z(), 6)};
+    if (target) row.insert(row.begin() + 1, *target);
+    table_.AddRow(row);
+  }
+  results::CsvTable table_;
   core::PeriodicProcess timer_;
 };
 
@@ -221,11 +237,15 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
         const double t_s = core::ToSeconds(t_window_end);
         const Eigen::Vector3d truth_m = world.target().StateAt(t_s).position_m;
         if (collector) return collector->OnWindow(t_window_end, truth_m);
+        std::vector<Eigen::Vector3d> targets_m;
+        if (world.targets().size() > 1)
+          for (std::size_t i : world.targets())
+            targets_m.push_back(world.uav(i).StateAt(t_s).position_m);
         const auto estimated = edge.EstimateWindow(tick, t_s);
         std::map<std::string, Eigen::Vector3d> scored;
         {
           const auto timing = core::WallProfile::Measure(&profile, "beams");
-          scored = scores->Score(t_s, truth_m, estimated, world);
+          scored = scores->Score(t_s, truth_m, estimated, world, targets_m);
         }
         if (o.on_window) o.on_window({tick + 1, t_s, &truth_m, &scored, &edge, &*scores});
         const auto timing =

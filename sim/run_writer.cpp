@@ -1,14 +1,37 @@
 #include "sim/run_writer.h"
 
+#include <algorithm>
 #include <filesystem>
 #include <iostream>
 
 #include "results/run_report.h"
 #include "sim/run_map.h"
 #include "sim/version.h"
+#include "sim/window_scorer.h"
+#include "sim/world_model.h"
 
 namespace uavsim::sim {
 namespace {
+
+// metrics.json's "gospa" (several targets): per method the RMS of GOSPA over
+// the windows and the mean of its parts per window.
+core::Json GospaJson(const FinishedRun& run) {
+  core::Json methods = core::Json::object();
+  for (const auto& [method, g] : run.scores.gospa()) {
+    const double n = static_cast<double>(std::max<std::uint64_t>(g.windows, 1));
+    methods[method] = {{"rms_m", g.rms_m()},
+                       {"localization_m2", g.localization_m2 / n},
+                       {"missed_m2", g.missed_m2 / n},
+                       {"false_m2", g.false_m2 / n},
+                       {"missed_per_window", static_cast<double>(g.missed) / n},
+                       {"false_per_window", static_cast<double>(g.false_targets) / n}};
+  }
+  return {{"c_m", run.scenario.outputs.gospa_c_m},
+          {"p", 2},
+          {"alpha", 2},
+          {"targets", run.world.targets().size()},
+          {"methods", methods}};
+}
 
 // metrics.json: RMSE per method, reception per modality, data rates.
 core::Json Metrics(const FinishedRun& run) {
@@ -37,6 +60,7 @@ core::Json Metrics(const FinishedRun& run) {
   metrics["rmse_common_m"] = common_json;
   // rate_snr_common.csv's windows: those every beam-steering method estimated.
   metrics["rate_snr_common_windows"] = run.scores.downlink_common_windows();
+  if (!run.scores.gospa().empty()) metrics["gospa"] = GospaJson(run);
   if (!run.edge.model_info().is_null()) metrics["uavloc_model"] = run.edge.model_info();
   core::Json modalities = core::Json::object();
   for (const auto& [m, traffic] : run.traffic) modalities[m] = {{"frames", traffic.frames}};

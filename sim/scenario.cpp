@@ -1,5 +1,6 @@
 #include "sim/scenario.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -95,6 +96,9 @@ template <class V>
 void Visit(V& v, UavConfig& c) {
   v("id", c.id);
   CheckId(v, "id", c.id);
+  v("role", c.role);
+  v.Check(c.role.empty() || c.role == "target" || c.role == "distractor", "role",
+          "expected \"target\" or \"distractor\", got " + core::DescribeValue(Json(c.role)));
   v("size_m", c.size_m, kUavSize);
   v.Object("trajectory", c.trajectory);
   v.Object("episodes", c.episodes);
@@ -131,6 +135,7 @@ template <class V>
 void Visit(V& v, OutputsConfig& c) {
   v.Object("snr_db", c.snr_db);
   v("truth_rate_hz", c.truth_rate_hz, Rule::Positive(1000.0));
+  v("gospa_c_m", c.gospa_c_m, Rule::Positive(1e6));
 }
 UAVSIM_INSTANTIATE_VISIT(OutputsConfig);
 
@@ -150,6 +155,13 @@ void Visit(V& v, Scenario& c) {
   v.Object("world", c.world);
   v.Object("weather", c.weather);
   v.Array("uavs", c.uavs, 1, 64);
+  if constexpr (V::kReading) {
+    for (std::size_t i = 0; i < c.uavs.size(); ++i)
+      if (c.uavs[i].role.empty()) c.uavs[i].role = i == 0 ? "target" : "distractor";
+    v.Check(std::any_of(c.uavs.begin(), c.uavs.end(),
+                        [](const UavConfig& u) { return u.role == "target"; }),
+            "uavs", "expected at least one UAV with \"role\": \"target\"");
+  }
   v.Object("distractors", c.distractors);
   v.Array("nodes", c.nodes, 0, 256);
   v.Map("links", c.links);
@@ -484,6 +496,18 @@ Scenario LoadScenario(const std::string& path, const std::vector<std::string>& o
 }
 
 Json ResolvedJson(const Scenario& s) { return core::ToJson(s); }
+
+std::vector<std::size_t> TargetIndices(const Scenario& s) {
+  std::vector<std::size_t> targets;
+  for (std::size_t i = 0; i < s.uavs.size(); ++i)
+    if (s.uavs[i].role.empty() ? i == 0 : s.uavs[i].role == "target") targets.push_back(i);
+  return targets;
+}
+
+std::size_t FirstTarget(const Scenario& s) {
+  const auto targets = TargetIndices(s);
+  return targets.empty() ? 0 : targets.front();
+}
 
 namespace {
 

@@ -28,7 +28,7 @@ struct FlightBoxConfig {
   Eigen::Vector3d max_m{30.0, 30.0, 50.0};
 };
 
-// How `uavsim train` varies the target (uavs[0]) from one training episode
+// How `uavsim train` varies the target (the first UAV of role "target") from one training episode
 // to the next (apps/train/train.h); a run, and any other UAV, ignores it. Empty
 // lists change nothing: the target keeps size_m, and its episodes fly
 // around the region its own trajectory covers over the scenario's duration,
@@ -45,6 +45,10 @@ struct EpisodeVariationConfig {
 
 struct UavConfig {
   std::string id = "target";
+  // "target": localized, scored and served; "distractor": flies and is
+  // seen, not scored. Unset in the file: uavs[0] is the target, the others
+  // distractors (the resolved scenario says so).
+  std::string role;
   Eigen::Vector3d size_m{0.5, 0.5, 0.2};
   core::TrajectoryConfig trajectory;
   EpisodeVariationConfig episodes;
@@ -69,6 +73,7 @@ struct SnrGridConfig {
 struct OutputsConfig {
   SnrGridConfig snr_db;
   double truth_rate_hz = 20.0;  // rows per simulated second in truth.csv
+  double gospa_c_m = 10.0;      // GOSPA's cut-off with several targets (window_scorer.h)
 };
 
 // How the run executes, never what it simulates: every setting gives the
@@ -89,7 +94,7 @@ struct Scenario {
   double duration_s = 60.0;
   core::WorldConfig world;
   core::WeatherConfig weather;
-  std::vector<UavConfig> uavs{UavConfig{}};  // uavs[0] is the target to localize
+  std::vector<UavConfig> uavs{UavConfig{}};  // roles: UavConfig::role
   DistractorsConfig distractors;
   std::vector<NodeConfig> nodes = DefaultNodes();
   std::map<std::string, channel::LinkConfig> links{{"default", channel::LinkConfig{}}};
@@ -162,6 +167,11 @@ void ApplyOverride(core::Json& doc, const std::string& assignment,
 // The same with the value given as JSON.
 void SetPointer(core::Json& doc, const std::string& pointer, const core::Json& value,
                 const std::string& file = "--set");
+
+// The UAVs whose role is "target", in scenario order (at least one).
+std::vector<std::size_t> TargetIndices(const Scenario& s);
+// The first of them: the one the single-target methods localize.
+std::size_t FirstTarget(const Scenario& s);
 
 // Loads `path`, applies the overrides, fills the struct and checks every rule
 // including cross-references, referenced files and the resource guard.

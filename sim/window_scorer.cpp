@@ -23,6 +23,16 @@ constexpr double kAbsurdBeyondBoundsM = 1000.0;
 
 }  // namespace
 
+void GospaAccumulator::Add(const pipeline::GospaScore& g) {
+  sum_sq += g.gospa_m * g.gospa_m;
+  localization_m2 += g.localization_m2;
+  missed_m2 += g.missed_m2;
+  false_m2 += g.false_m2;
+  missed += static_cast<std::uint64_t>(g.missed);
+  false_targets += static_cast<std::uint64_t>(g.false_targets);
+  ++windows;
+}
+
 WindowScorer::WindowScorer(const Scenario& scenario, std::vector<std::string> steered)
     : scenario_(scenario),
       steered_(steered),
@@ -51,7 +61,8 @@ void WindowScorer::FindBounds(const WorldModel& world) {
 
 std::map<std::string, Eigen::Vector3d> WindowScorer::Score(
     double t_s, const Eigen::Vector3d& truth_m,
-    const std::map<std::string, Eigen::Vector3d>& raw_estimates, WorldModel& world) {
+    const std::map<std::string, Eigen::Vector3d>& raw_estimates, WorldModel& world,
+    const std::vector<Eigen::Vector3d>& targets_m) {
   if (!bounded_) FindBounds(world);
   ++windows_;
   std::map<std::string, Eigen::Vector3d> estimated;
@@ -68,6 +79,14 @@ std::map<std::string, Eigen::Vector3d> WindowScorer::Score(
     estimates_.AddRow({FormatFixed(t_s, 6), method, FormatFixed(p.x(), 6), FormatFixed(p.y(), 6),
                        FormatFixed(p.z(), 6)});
     rmse_[method].Add(p - truth_m);
+  }
+  if (targets_m.size() >= 2) {
+    const pipeline::GospaConfig config{scenario_.outputs.gospa_c_m, 2.0};
+    for (const std::string& method : scenario_.pipeline.methods) {
+      std::vector<Eigen::Vector3d> set;
+      if (auto it = estimated.find(method); it != estimated.end()) set.push_back(it->second);
+      gospa_[method].Add(pipeline::Gospa(targets_m, set, config));
+    }
   }
   const std::size_t methods = scenario_.pipeline.methods.size();
   if (methods >= 2 && estimated.size() == methods)

@@ -8,17 +8,24 @@
 // has an estimate (rate_snr_common.csv): the methods' curves on the same
 // windows, as the RMSE over common windows.
 //
+// With more than one target (UavConfig::role), each method's estimate is
+// also scored as a set against every target's truth by GOSPA
+// (pipeline/tracking/gospa.h; c = /outputs/gospa_c_m, p = 2, alpha = 2):
+// a window without an estimate misses every target.
+//
 // Determinism: the downlinks draw from their own streams
 // "base_station/downlink" and "base_station/downlink/common".
 #pragma once
 
 #include <Eigen/Core>
+#include <cmath>
 #include <cstdint>
 #include <map>
 #include <string>
 #include <vector>
 
 #include "channel/beamformer.h"
+#include "pipeline/tracking/gospa.h"
 #include "results/csv.h"
 #include "sim/scenario.h"
 #include "sim/world_model.h"
@@ -33,6 +40,14 @@ struct RmseAccumulator {
   double value() const { return count ? std::sqrt(sum_sq / static_cast<double>(count)) : 0.0; }
 };
 
+// A method's GOSPA over the windows, its p-th powers summed.
+struct GospaAccumulator {
+  double sum_sq = 0.0, localization_m2 = 0.0, missed_m2 = 0.0, false_m2 = 0.0;
+  std::uint64_t windows = 0, missed = 0, false_targets = 0;
+  void Add(const pipeline::GospaScore& g);
+  double rms_m() const { return windows ? std::sqrt(sum_sq / static_cast<double>(windows)) : 0.0; }
+};
+
 class WindowScorer {
  public:
   // `steered`: the methods whose estimates steer a beam.
@@ -44,9 +59,11 @@ class WindowScorer {
   // or lies more than 1 km outside the box of the nodes, the base station
   // and the target's whole path, counts as no estimate (rejected()).
   // Returns the estimates scored (those not rejected).
+  // `targets_m`: every target's truth at t_s (two or more: GOSPA is scored).
   std::map<std::string, Eigen::Vector3d> Score(
       double t_s, const Eigen::Vector3d& truth_m,
-      const std::map<std::string, Eigen::Vector3d>& estimated, WorldModel& world);
+      const std::map<std::string, Eigen::Vector3d>& estimated, WorldModel& world,
+      const std::vector<Eigen::Vector3d>& targets_m = {});
 
   std::uint64_t windows() const { return windows_; }
   const results::CsvTable& estimates() const { return estimates_; }
@@ -60,6 +77,8 @@ class WindowScorer {
   std::map<std::string, std::uint64_t> rejected() const;
   // Per method over the windows every method estimated (two or more methods).
   const std::map<std::string, RmseAccumulator>& rmse_common() const { return rmse_common_; }
+  // Per method, with two or more targets (else empty).
+  const std::map<std::string, GospaAccumulator>& gospa() const { return gospa_; }
 
  private:
   void FindBounds(const WorldModel& world);
@@ -74,6 +93,7 @@ class WindowScorer {
   std::uint64_t downlink_common_windows_ = 0;
   results::CsvTable estimates_{{"t_s", "method", "x_m", "y_m", "z_m"}};
   std::map<std::string, RmseAccumulator> rmse_, rmse_common_;
+  std::map<std::string, GospaAccumulator> gospa_;
   std::uint64_t windows_ = 0;
 };
 

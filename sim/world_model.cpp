@@ -39,7 +39,9 @@ Eigen::Isometry3d MultirotorPose(const core::KinematicState& x) {
 
 WorldModel::WorldModel(const Scenario& s)
     : geometry_(core::BuildWorldGeometry(s.world, s.base_dir, core::RngStream(s.seed, "world"))),
-      scene_(std::make_unique<sensors::RaycastScene>(geometry_)) {
+      scene_(std::make_unique<sensors::RaycastScene>(geometry_)),
+      targets_(TargetIndices(s)),
+      target_(FirstTarget(s)) {
   for (const UavConfig& uav : s.uavs) {
     uav_trajectories_.push_back(core::MakeTrajectory(
         uav.trajectory, core::RngStream(s.seed, "uav/" + uav.id + "/trajectory")));

@@ -29,8 +29,11 @@ class WorldModel : public channel::PathOracle {
   sensors::RaycastScene& scene() { return *scene_; }
   const sensors::RaycastScene& scene() const { return *scene_; }
   const core::WorldGeometry& geometry() const { return geometry_; }
-  // The target: uavs[0].
-  const core::Trajectory& target() const { return *uav_trajectories_.front(); }
+  // The target the single-target methods localize: the first UAV whose
+  // role is "target" (uavs[0] unless the scenario says otherwise).
+  const core::Trajectory& target() const { return *uav_trajectories_[target_]; }
+  // Every UAV whose role is "target", in scenario order.
+  const std::vector<std::size_t>& targets() const { return targets_; }
   std::size_t uav_count() const { return uav_trajectories_.size(); }
   const core::Trajectory& uav(std::size_t i) const { return *uav_trajectories_[i]; }
   double uav_radius_m(std::size_t i) const { return uav_radii_m_[i]; }  // bounding sphere
@@ -54,6 +57,8 @@ class WorldModel : public channel::PathOracle {
   std::vector<std::unique_ptr<core::Trajectory>> bird_trajectories_;
   std::vector<double> uav_radii_m_, bird_radii_m_;
   std::vector<int> moving_ids_;  // scene ids of UAVs then birds
+  std::vector<std::size_t> targets_;
+  std::size_t target_ = 0;
 };
 
 }  // namespace uavsim::sim

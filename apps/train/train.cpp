@@ -38,7 +38,7 @@ struct FlightRegion {
 };
 
 FlightRegion RegionOf(const Scenario& s) {
-  const UavConfig& target = s.uavs.front();
+  const UavConfig& target = s.uavs[FirstTarget(s)];
   const auto trajectory = core::MakeTrajectory(
       target.trajectory, core::RngStream(s.seed, "uav/" + target.id + "/trajectory"));
   FlightRegion r{Eigen::Vector3d::Constant(1e300), Eigen::Vector3d::Constant(-1e300)};
@@ -113,7 +113,8 @@ Scenario EpisodeScenario(const Scenario& base, const EpisodePlan& plan, int i, s
   core::RngStream rng(plan.seed, "train/episode/" + std::to_string(i));
   core::Json doc = ResolvedJson(base);
   std::string what;
-  const EpisodeVariationConfig& vary = base.uavs.front().episodes;
+  const std::size_t target = FirstTarget(base);
+  const EpisodeVariationConfig& vary = base.uavs[target].episodes;
   FlightRegion region;
   if (vary.regions.empty()) {
     region = RegionOf(base);
@@ -122,7 +123,8 @@ Scenario EpisodeScenario(const Scenario& base, const EpisodePlan& plan, int i, s
         vary.regions[static_cast<std::size_t>(i / 3) % vary.regions.size()];
     region = {box.min_m, box.max_m};
   }
-  doc["uavs"][0]["trajectory"] = DrawTrajectory(base.uavs.front().trajectory, region, i, rng, what);
+  doc["uavs"][target]["trajectory"] =
+      DrawTrajectory(base.uavs[target].trajectory, region, i, rng, what);
   doc["seed"] = rng.NextU64() >> 12;
   doc["duration_s"] = plan.episode_s;
   doc["name"] = base.name + "-episode-" + std::to_string(i);

@@ -64,6 +64,8 @@ def test_a_python_method_that_returns_the_truth_scores_zero(tmp_path):
     L, M, F, z = calls[0][0]
     assert (L, M) == (4, 3) and z == 16 and calls[0][1] == (L, M, F)
     assert "oracle" in run.rate_snr
+    with open(tmp_path / "r" / "report.html") as f:
+        assert "oracle (Python, 4 windows)" in f.read()
     # The same flight.
     assert np.array_equal(run.truth, reference.truth[: len(run.truth)])
 
