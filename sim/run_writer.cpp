@@ -13,13 +13,25 @@
 namespace uavsim::sim {
 namespace {
 
-// metrics.json's "gospa" (several targets): per method the RMS of GOSPA over
-// the windows and the mean of its parts per window.
+// metrics.json's "gospa" (several targets): per method the RMS of GOSPA and
+// of OSPA over the windows, the mean of GOSPA's parts and of the
+// cardinality error per window, and each target's RMSE where assigned.
 core::Json GospaJson(const FinishedRun& run) {
   core::Json methods = core::Json::object();
+  const std::vector<std::size_t>& targets = run.world.targets();
   for (const auto& [method, g] : run.scores.gospa()) {
     const double n = static_cast<double>(std::max<std::uint64_t>(g.windows, 1));
+    core::Json per_target = core::Json::object();
+    for (std::size_t i = 0; i < targets.size(); ++i) {
+      const RmseAccumulator none;
+      const RmseAccumulator& a = i < g.per_target.size() ? g.per_target[i] : none;
+      per_target[run.scenario.uavs[targets[i]].id] = {
+          {"rmse_m", a.count ? core::Json(a.value()) : core::Json(nullptr)}, {"windows", a.count}};
+    }
     methods[method] = {{"rms_m", g.rms_m()},
+                       {"ospa_rms_m", g.ospa_rms_m()},
+                       {"cardinality_error", g.cardinality_error / n},
+                       {"per_target", per_target},
                        {"localization_m2", g.localization_m2 / n},
                        {"missed_m2", g.missed_m2 / n},
                        {"false_m2", g.false_m2 / n},

@@ -1,6 +1,7 @@
 #include "sim/window_scorer.h"
 
 #include <algorithm>
+#include <cmath>
 #include <utility>
 
 #include "core/rain_attenuation.h"
@@ -23,7 +24,18 @@ constexpr double kAbsurdBeyondBoundsM = 1000.0;
 
 }  // namespace
 
-void GospaAccumulator::Add(const pipeline::GospaScore& g) {
+void GospaAccumulator::Add(const std::vector<Eigen::Vector3d>& targets_m,
+                           const std::vector<Eigen::Vector3d>& estimates_m,
+                           const pipeline::GospaConfig& config) {
+  const pipeline::GospaScore g = pipeline::Gospa(targets_m, estimates_m, config);
+  const double ospa = pipeline::Ospa(targets_m, estimates_m, config);
+  ospa_sum_sq += ospa * ospa;
+  cardinality_error +=
+      std::abs(static_cast<double>(estimates_m.size()) - static_cast<double>(targets_m.size()));
+  per_target.resize(targets_m.size());
+  for (std::size_t i = 0; i < targets_m.size(); ++i)
+    if (const int j = g.estimate_of_truth[i]; j >= 0)
+      per_target[i].Add(estimates_m[static_cast<std::size_t>(j)] - targets_m[i]);
   sum_sq += g.gospa_m * g.gospa_m;
   localization_m2 += g.localization_m2;
   missed_m2 += g.missed_m2;
@@ -85,7 +97,7 @@ std::map<std::string, Eigen::Vector3d> WindowScorer::Score(
     for (const std::string& method : scenario_.pipeline.methods) {
       std::vector<Eigen::Vector3d> set;
       if (auto it = estimated.find(method); it != estimated.end()) set.push_back(it->second);
-      gospa_[method].Add(pipeline::Gospa(targets_m, set, config));
+      gospa_[method].Add(targets_m, set, config);
     }
   }
   const std::size_t methods = scenario_.pipeline.methods.size();

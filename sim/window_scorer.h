@@ -41,11 +41,20 @@ struct RmseAccumulator {
 };
 
 // A method's GOSPA over the windows, its p-th powers summed.
+// A method's GOSPA over the windows, its p-th powers summed; beside it
+// OSPA, the cardinality error |estimates - targets| and, per target (in
+// scenario order), the RMSE over the windows an estimate was assigned to it.
 struct GospaAccumulator {
   double sum_sq = 0.0, localization_m2 = 0.0, missed_m2 = 0.0, false_m2 = 0.0;
+  double ospa_sum_sq = 0.0, cardinality_error = 0.0;
   std::uint64_t windows = 0, missed = 0, false_targets = 0;
-  void Add(const pipeline::GospaScore& g);
+  std::vector<RmseAccumulator> per_target;
+  void Add(const std::vector<Eigen::Vector3d>& targets_m,
+           const std::vector<Eigen::Vector3d>& estimates_m, const pipeline::GospaConfig& config);
   double rms_m() const { return windows ? std::sqrt(sum_sq / static_cast<double>(windows)) : 0.0; }
+  double ospa_rms_m() const {
+    return windows ? std::sqrt(ospa_sum_sq / static_cast<double>(windows)) : 0.0;
+  }
 };
 
 class WindowScorer {

@@ -39,24 +39,32 @@ def test_default_roles_change_nothing(tmp_path, monkeypatch):
     assert [u["role"] for u in resolved["uavs"]] == ["target", "distractor"]
 
 
-def gospa_rms(run, truth, method, c):
-    """GOSPA (p = alpha = 2) of the method's single estimate against both
-    targets per window, recomputed here from truth.csv and estimates.csv."""
+def multi_target_scores(run, truth, method, c):
+    """GOSPA and OSPA (p = 2; GOSPA's alpha = 2) of the method's single
+    estimate against both targets per window, and each target's RMSE where
+    the estimate was assigned to it, recomputed from truth.csv and
+    estimates.csv: {"rms_m", "ospa_rms_m", "per_target": {id: (rmse, n)}}."""
     est = {round(t, 6): np.array([x, y, z]) for t, x, y, z in run.estimates[method].tolist()}
-    total = 0.0
+    gospa2 = ospa2 = 0.0
+    errors = {}
     n = run.metrics["windows"]
     for k in range(1, n + 1):
         t = round(0.2 * k, 6)
         rows = truth[np.abs(truth["t_s"] - t) < 1e-9]
         assert len(rows) == 2
-        targets = [np.array([r["x_m"], r["y_m"], r["z_m"]]) for r in rows]
         if t not in est:
-            total += c * c  # both missed: 2 x c^2 / 2
+            gospa2 += c * c  # both missed: 2 x c^2 / 2
+            ospa2 += c * c
             continue
-        d = min(np.linalg.norm(est[t] - p) for p in targets)
+        d = [np.linalg.norm(est[t] - np.array([r["x_m"], r["y_m"], r["z_m"]])) for r in rows]
+        i = int(np.argmin(d))
         # One target assigned (the other missed), or none: both missed and a false estimate.
-        total += d * d + c * c / 2 if d < c else 1.5 * c * c
-    return np.sqrt(total / n)
+        gospa2 += d[i] ** 2 + c * c / 2 if d[i] < c else 1.5 * c * c
+        ospa2 += (min(d[i], c) ** 2 + c * c) / 2
+        if d[i] < c:
+            errors.setdefault(rows[i]["target"], []).append(d[i] ** 2)
+    return {"rms_m": np.sqrt(gospa2 / n), "ospa_rms_m": np.sqrt(ospa2 / n),
+            "per_target": {t: (np.sqrt(np.mean(e)), len(e)) for t, e in errors.items()}}
 
 
 def test_two_targets_truth_rows_and_gospa():
@@ -73,9 +81,16 @@ def test_two_targets_truth_rows_and_gospa():
     g = run.metrics["gospa"]
     assert g["targets"] == 2 and g["c_m"] == 10.0
     for method in ("uavloc", "anchor_track", "ekf"):
-        assert g["methods"][method]["rms_m"] == pytest.approx(gospa_rms(run, longer, method, 10.0),
-                                                              abs=1e-5)
-        assert g["methods"][method]["missed_per_window"] >= 1.0
+        ours = multi_target_scores(run, longer, method, 10.0)
+        got = g["methods"][method]
+        assert got["rms_m"] == pytest.approx(ours["rms_m"], abs=1e-5)
+        assert got["ospa_rms_m"] == pytest.approx(ours["ospa_rms_m"], abs=1e-5)
+        assert got["missed_per_window"] >= 1.0
+        assert got["cardinality_error"] == 1.0 + (run.metrics["windows"] - len(run.estimates[method])) \
+            / run.metrics["windows"]
+        for target, (rmse, windows) in ours["per_target"].items():
+            assert got["per_target"][target]["windows"] == windows
+            assert got["per_target"][target]["rmse_m"] == pytest.approx(rmse, abs=1e-5)
 
 
 def test_a_distractor_first_makes_the_second_uav_the_target():
