@@ -97,7 +97,7 @@ void Visit(V& v, UavConfig& c) {
   v("id", c.id);
   CheckId(v, "id", c.id);
   v("role", c.role);
-  v.Check(c.role.empty() || c.role == "target" || c.role == "distractor", "role",
+  v.Check(c.role == "target" || c.role == "distractor", "role",
           "expected \"target\" or \"distractor\", got " + core::DescribeValue(Json(c.role)));
   v("size_m", c.size_m, kUavSize);
   v.Object("trajectory", c.trajectory);
@@ -156,8 +156,10 @@ void Visit(V& v, Scenario& c) {
   v.Object("weather", c.weather);
   v.Array("uavs", c.uavs, 1, 64);
   if constexpr (V::kReading) {
-    for (std::size_t i = 0; i < c.uavs.size(); ++i)
-      if (c.uavs[i].role.empty()) c.uavs[i].role = i == 0 ? "target" : "distractor";
+    // The default role is the index's: uavs[0] "target", the others "distractor".
+    if (const core::Json* raw = v.Raw("uavs"); raw && raw->is_array())
+      for (std::size_t i = 1; i < c.uavs.size() && i < raw->size(); ++i)
+        if (!(*raw)[i].is_object() || !(*raw)[i].contains("role")) c.uavs[i].role = "distractor";
     v.Check(std::any_of(c.uavs.begin(), c.uavs.end(),
                         [](const UavConfig& u) { return u.role == "target"; }),
             "uavs", "expected at least one UAV with \"role\": \"target\"");
@@ -500,7 +502,7 @@ Json ResolvedJson(const Scenario& s) { return core::ToJson(s); }
 std::vector<std::size_t> TargetIndices(const Scenario& s) {
   std::vector<std::size_t> targets;
   for (std::size_t i = 0; i < s.uavs.size(); ++i)
-    if (s.uavs[i].role.empty() ? i == 0 : s.uavs[i].role == "target") targets.push_back(i);
+    if (s.uavs[i].role == "target") targets.push_back(i);
   return targets;
 }
 

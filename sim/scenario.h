@@ -48,7 +48,7 @@ struct UavConfig {
   // "target": localized, scored and served; "distractor": flies and is
   // seen, not scored. Unset in the file: uavs[0] is the target, the others
   // distractors (the resolved scenario says so).
-  std::string role;
+  std::string role = "target";
   Eigen::Vector3d size_m{0.5, 0.5, 0.2};
   core::TrajectoryConfig trajectory;
   EpisodeVariationConfig episodes;
