@@ -28,13 +28,6 @@ int NearestGridIndex(double psi, int size) {
 }
 
 // Locale-independent fixed-point text; "-0.00" prints as "0.00".
-std::string Fixed(double x, int decimals) {
-  char buf[64];
-  const auto r = std::to_chars(buf, buf + sizeof buf, x, std::chars_format::fixed, decimals);
-  std::string s(buf, r.ptr);
-  if (s[0] == '-' && s.find_first_not_of("-0.") == std::string::npos) s.erase(0, 1);
-  return s;
-}
 
 }  // namespace
 
@@ -166,7 +159,8 @@ std::string RateSnrAccumulator::Csv() const {
   for (const std::string& beam : order_) {
     if (windows(beam) == 0) continue;
     for (std::size_t i = 0; i < snr_db_.size(); ++i)
-      out += Fixed(snr_db_[i], 2) + "," + beam + "," + Fixed(MeanRateBpsHz(beam, i), 6) + "\n";
+      out += FixedDecimal(snr_db_[i], 2) + "," + beam + "," +
+             FixedDecimal(MeanRateBpsHz(beam, i), 6) + "\n";
   }
   return out;
 }
@@ -236,6 +230,14 @@ void DownlinkScorer::AddWindow(const Eigen::Vector3d& true_position_m,
       score(prefix, m, it == estimates.end() ? nullptr : &it->second, dft);
     }
   }
+}
+
+std::string FixedDecimal(double x, int decimals) {
+  char buf[64];
+  const auto r = std::to_chars(buf, buf + sizeof buf, x, std::chars_format::fixed, decimals);
+  std::string s(buf, r.ptr);
+  if (s[0] == '-' && s.find_first_not_of("-0.") == std::string::npos) s.erase(0, 1);
+  return s;
 }
 
 }  // namespace uavsim::channel

@@ -45,6 +45,10 @@ double BeamGain(const Eigen::VectorXcd& h, const Eigen::VectorXcd& f);
 double LosSteeredGain(const Upa& upa, const Eigen::Vector3d& bs_m,
                       const Eigen::Vector3d& estimate_m, const Eigen::Vector3d& truth_m);
 
+// x with `decimals` decimals, locale-independent, never "-0.00" (the
+// rate tables' cells).
+std::string FixedDecimal(double x, int decimals);
+
 // log2(1 + 10^(snr_db / 10) gain), bit/s/Hz.
 double RateBpsHz(double snr_db, double gain);
 

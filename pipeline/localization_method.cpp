@@ -6,6 +6,8 @@
 #include "pipeline/baselines/ekf.h"
 #include "pipeline/edge/edge_localizer.h"
 #include "pipeline/edge/scripted_edge.h"
+#include "pipeline/multitarget/gnn_tracker.h"
+#include "pipeline/multitarget/per_track_uavloc.h"
 #include "pipeline/pipeline_config.h"
 
 namespace uavsim::pipeline {
@@ -38,6 +40,43 @@ class AnchorTrackLocalization final : public LocalizationMethod {
     return track_.OnWindow(w.k, w.anchors);
   }
   AnchorTrack track_;
+};
+
+class MttLocalization final : public LocalizationMethod {
+ public:
+  explicit MttLocalization(double window_s)
+      : LocalizationMethod("mtt", {false, false, false, /*detections=*/true}, true),
+        tracker_(window_s) {}
+
+ private:
+  std::optional<Eigen::Vector3d> DoEstimate(const WindowArrivals& w) override {
+    tracks_ = tracker_.OnWindow(w.k, w.detections);
+    if (tracks_.empty()) return std::nullopt;
+    return tracks_.front().position_m;  // the oldest confirmed track
+  }
+  std::optional<std::vector<TrackEstimate>> DoTracks() const override { return tracks_; }
+  GnnTracker tracker_;
+  std::vector<TrackEstimate> tracks_;
+};
+
+class PerTrackLocalization final : public LocalizationMethod {
+ public:
+  PerTrackLocalization(double window_s, PerTrackUavLoc::EdgeFactory make_edge)
+      : LocalizationMethod("uavloc_per_track",
+                           {false, /*latents=*/true, false,
+                            /*detections=*/true},
+                           true),
+        per_track_(window_s, std::move(make_edge)) {}
+
+ private:
+  std::optional<Eigen::Vector3d> DoEstimate(const WindowArrivals& w) override {
+    tracks_ = per_track_.OnWindow(w.k, w.detections);
+    if (tracks_.empty()) return std::nullopt;
+    return tracks_.front().position_m;  // the oldest confirmed track's
+  }
+  std::optional<std::vector<TrackEstimate>> DoTracks() const override { return tracks_; }
+  PerTrackUavLoc per_track_;
+  std::vector<TrackEstimate> tracks_;
 };
 
 class LearnedLocalization final : public LocalizationMethod {
@@ -87,6 +126,15 @@ std::unique_ptr<LocalizationMethod> MakeEkfMethod(std::unique_ptr<Ekf> ekf) {
 
 std::unique_ptr<LocalizationMethod> MakeAnchorTrackMethod(double window_s) {
   return std::make_unique<AnchorTrackLocalization>(window_s);
+}
+
+std::unique_ptr<LocalizationMethod> MakeMttMethod(double window_s) {
+  return std::make_unique<MttLocalization>(window_s);
+}
+
+std::unique_ptr<LocalizationMethod> MakePerTrackMethod(
+    double window_s, std::function<std::unique_ptr<EdgeLocalizer>()> make_edge) {
+  return std::make_unique<PerTrackLocalization>(window_s, std::move(make_edge));
 }
 
 std::unique_ptr<LocalizationMethod> MakeLearnedMethod(std::string name,

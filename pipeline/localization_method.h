@@ -6,6 +6,8 @@
 // the server's; each family's work is its private Do... (ns-3's
 // CalcRxPower / DoCalcRxPower). Families (factories below): `ekf` (the
 // classical baseline), `anchor_track` (our anchored head's filter alone),
+// `mtt` (the multi-target tracker), `uavloc_per_track` (the paper's network
+// per track),
 // the learned methods (uavloc, uavloc_anchored, the paper's variants and
 // modality subsets: pipeline/model_catalog.h makes them) and users'
 // TorchScript models.
@@ -17,6 +19,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -25,6 +28,7 @@
 #include "core/modality.h"
 #include "pipeline/anchored/geometric_anchor.h"
 #include "pipeline/edge/te_align.h"
+#include "pipeline/multitarget/detection.h"
 #include "pipeline/node/observations.h"
 
 namespace uavsim::pipeline {
@@ -51,13 +55,17 @@ struct WindowArrivals {
   WindowInputs latents;
   // The geometric anchors (kNone left out), when a method needs anchors.
   WindowAnchors anchors;
+  // Every observation of every message (the further ones too), in arrival
+  // order, when a method needs detections.
+  std::vector<Detection> detections;
 };
 
 // What a method needs of the nodes and the server.
 struct MethodNeeds {
-  bool arrivals = false;  // Observe on every arrival (the ekf)
-  bool latents = false;   // the nodes run a trained model's IB-CC encoders
-  bool anchors = false;   // the nodes send geometric anchors with their latents
+  bool arrivals = false;    // Observe on every arrival (the ekf)
+  bool latents = false;     // the nodes run a trained model's IB-CC encoders
+  bool anchors = false;     // the nodes send geometric anchors with their latents
+  bool detections = false;  // every observation's anchor (and latent), for several targets
 };
 
 class LocalizationMethod {
@@ -78,6 +86,10 @@ class LocalizationMethod {
   // Its estimate at window w's end, or nothing where it has none yet.
   // Windows come in increasing k.
   std::optional<Eigen::Vector3d> Estimate(const WindowArrivals& w) { return DoEstimate(w); }
+  // After Estimate: a multi-target method's labelled estimates at the
+  // window's end (its Estimate is one of them); nothing for a method that
+  // localizes one target.
+  std::optional<std::vector<TrackEstimate>> Tracks() const { return DoTracks(); }
 
  protected:
   LocalizationMethod(std::string name, MethodNeeds needs, bool steers_beam)
@@ -86,6 +98,7 @@ class LocalizationMethod {
  private:
   virtual void DoObserve(const Arrival&) {}
   virtual std::optional<Eigen::Vector3d> DoEstimate(const WindowArrivals& w) = 0;
+  virtual std::optional<std::vector<TrackEstimate>> DoTracks() const { return std::nullopt; }
 
   std::string name_;
   MethodNeeds needs_;
@@ -97,6 +110,13 @@ class LocalizationMethod {
 std::unique_ptr<LocalizationMethod> MakeEkfMethod(std::unique_ptr<Ekf> ekf);
 // `anchor_track`: the anchored head's filter alone on each window's anchors.
 std::unique_ptr<LocalizationMethod> MakeAnchorTrackMethod(double window_s);
+// `mtt`: the multi-target tracker (pipeline/multitarget/gnn_tracker.h) on
+// every detection; its Estimate is its oldest confirmed track.
+std::unique_ptr<LocalizationMethod> MakeMttMethod(double window_s);
+// `uavloc_per_track`: the paper's edge network per track of mtt's tracker
+// (pipeline/multitarget/per_track_uavloc.h); `make_edge` loads a network.
+std::unique_ptr<LocalizationMethod> MakePerTrackMethod(
+    double window_s, std::function<std::unique_ptr<EdgeLocalizer>()> make_edge);
 // A learned edge network fed the modalities in `modalities` (bit m:
 // Modality m); `anchored` when it reads the nodes' geometric anchors.
 std::unique_ptr<LocalizationMethod> MakeLearnedMethod(std::string name,

@@ -95,6 +95,8 @@ core::Json NodeExtensionsOf(const PreprocessConfig& p) {
   if (p.radar.rain_doppler_rejection) ext.push_back("radar.rain_doppler_rejection=true");
   if (p.radar.selection != RadarSelection::kLargest)
     ext.push_back(std::string("radar.selection=") + RadarSelectionName(p.radar.selection));
+  if (p.max_observations > 1)
+    ext.push_back("max_observations=" + std::to_string(p.max_observations));
   return ext;
 }
 
@@ -122,7 +124,8 @@ void RequireHeads(const CatalogScenario& s, const std::string& file, const std::
   for (std::size_t i = 0; i < s.pipeline->methods.size(); ++i) {
     const std::string& method = s.pipeline->methods[i];
     const std::string at = "/pipeline/methods/" + std::to_string(i);
-    const bool paper = MethodOf(method).learned == "uavloc", anchored = method == "uavloc_anchored";
+    const bool paper = MethodOf(method).learned == "uavloc" || method == "uavloc_per_track";
+    const bool anchored = method == "uavloc_anchored";
     if ((paper || anchored) && m.variant != "paper")
       throw core::ConfigError(file, at,
                               "the model " + path + " is the " + m.variant +
@@ -258,7 +261,8 @@ bool NeedsTrainedModel(const PipelineConfig& p) {
   const auto& m = p.methods;
   if (!p.scripted.empty() || !p.hosted.empty()) return true;  // they run on the model's latents
   return std::any_of(m.begin(), m.end(), [](const std::string& method) {
-    return !MethodOf(method).learned.empty() || method == "uavloc_anchored";
+    return !MethodOf(method).learned.empty() || method == "uavloc_anchored" ||
+           method == "uavloc_per_track";
   });
 }
 
@@ -349,6 +353,10 @@ void ModelCatalog::Load(bool quiet) {
   if (info_["extensions"].is_array())
     for (const core::Json& e : NodeExtensionsOf(s_.pipeline->preprocess))
       info_["extensions"].push_back(e);
+  const auto& methods = s_.pipeline->methods;
+  if (info_["extensions"].is_array() &&
+      std::find(methods.begin(), methods.end(), "uavloc_per_track") != methods.end())
+    info_["extensions"].push_back("method=uavloc_per_track");
   info_["temporal"] = TemporalOf(m);
   info_["variant"] = m.variant;
   for (const auto& [variant, path] : variant_paths_) {
@@ -373,6 +381,11 @@ std::unique_ptr<LocalizationMethod> ModelCatalog::MakeMethod(const std::string& 
     edge->WaitForTrack(s_.pipeline->uavloc_wait_for_track);
     return MakeLearnedMethod(name, std::move(edge), kModalitySubsets, /*anchored=*/true);
   }
+  if (name == "uavloc_per_track") {
+    const UavLocModelFiles* files = model_.get();
+    return MakePerTrackMethod(s_.pipeline->window_s,
+                              [files] { return files->LoadEdge(/*anchored=*/false); });
+  }
   const MethodName method = MethodOf(name);
   if (method.learned.empty()) return nullptr;
   const std::string variant = VariantOfMethod(method.learned);
@@ -384,7 +397,8 @@ std::unique_ptr<LocalizationMethod> ModelCatalog::MakeMethod(const std::string& 
 bool SendsAnchors(const PipelineConfig& p) {
   const auto& m = p.methods;
   return std::find(m.begin(), m.end(), "uavloc_anchored") != m.end() ||
-         std::find(m.begin(), m.end(), "anchor_track") != m.end();
+         std::find(m.begin(), m.end(), "anchor_track") != m.end() ||
+         std::find(m.begin(), m.end(), "mtt") != m.end();
 }
 
 }  // namespace uavsim::pipeline

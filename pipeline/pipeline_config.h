@@ -76,6 +76,9 @@ inline constexpr int kModalitySubsets = 7;
 // camera+lidar, camera+radar, lidar+radar, all (e.g. uavloc[camera+lidar];
 // uavloc_camera is uavloc[camera]).
 const std::vector<std::string>& KnownMethods();
+// Whether a method that gives several labelled estimates per window (mtt,
+// uavloc_per_track) runs.
+bool RunsMultiTarget(const PipelineConfig& p);
 
 // A method name taken apart: the learned method it runs ("uavloc", a
 // variant's method; empty for anchor_track, ekf and uavloc_anchored) and

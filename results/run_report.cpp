@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <optional>
 #include <ostream>
@@ -108,18 +109,45 @@ constexpr const char* kMethodColours[] = {"#e6550d", "#3182bd", "#31a354", "#756
 struct Estimate {
   double t_s = 0.0;
   Eigen::Vector3d p;
+  long track = 0;  // estimates.csv's track column (0: a single estimate, or none)
+};
+
+// One target's true path (truth.csv rows of one `target`).
+struct TargetPath {
+  std::string id;
+  std::vector<double> t;
+  std::vector<Eigen::Vector3d> p;
 };
 
 struct RunData {
   fs::path dir;
   Json manifest, metrics, scenario;
   std::optional<Table> truth, estimates, packets, world_top, layout, rate_snr, rate_snr_common;
-  std::vector<std::string> methods;  // in order of first appearance
+  std::optional<Table> gospa, rate_snr_targets;  // several targets, or mtt
+  std::vector<TargetPath> targets;               // several targets: each one's path
+  std::vector<std::string> methods;              // in order of first appearance
   std::map<std::string, std::vector<Estimate>> estimated;
   std::vector<double> truth_t;
   std::vector<Eigen::Vector3d> truth_p;
   double window_s = 0.2, duration_s = 0.0;
 };
+
+// Each target's path from truth.csv's `target` column (several targets).
+void LoadTargets(RunData& d) {
+  const Table& truth = *d.truth;
+  const long target = truth.CsvFile::Column("target");
+  if (target < 0) return;
+  const long t = truth.Column("t_s"), x = truth.Column("x_m"), y = truth.Column("y_m"),
+             z = truth.Column("z_m");
+  for (std::size_t i = 0; i < truth.rows.size(); ++i) {
+    const std::string& id = truth.rows[i][static_cast<std::size_t>(target)];
+    auto it = std::find_if(d.targets.begin(), d.targets.end(),
+                           [&](const TargetPath& p) { return p.id == id; });
+    if (it == d.targets.end()) it = d.targets.insert(d.targets.end(), TargetPath{id, {}, {}});
+    it->t.push_back(truth.Number(i, t));
+    it->p.emplace_back(truth.Number(i, x), truth.Number(i, y), truth.Number(i, z));
+  }
+}
 
 RunData Load(const std::string& dir) {
   RunData d;
@@ -147,6 +175,9 @@ RunData Load(const std::string& dir) {
   d.layout = ReadTable(d.dir, "layout.csv");
   d.rate_snr = ReadTable(d.dir, "rate_snr.csv");
   d.rate_snr_common = ReadTable(d.dir, "rate_snr_common.csv");
+  d.gospa = ReadTable(d.dir, "gospa.csv");
+  d.rate_snr_targets = ReadTable(d.dir, "rate_snr_targets.csv");
+  if (d.truth) LoadTargets(d);
   if (d.truth) {
     const long t = d.truth->Column("t_s"), x = d.truth->Column("x_m"), y = d.truth->Column("y_m"),
                z = d.truth->Column("z_m");
@@ -167,12 +198,13 @@ RunData Load(const std::string& dir) {
   if (d.estimates) {
     const Table& e = *d.estimates;
     const long t = e.Column("t_s"), m = e.Column("method"), x = e.Column("x_m"),
-               y = e.Column("y_m"), z = e.Column("z_m");
+               y = e.Column("y_m"), z = e.Column("z_m"), track = e.CsvFile::Column("track");
     for (std::size_t i = 0; i < e.rows.size(); ++i) {
       const std::string& method = e.rows[i][static_cast<std::size_t>(m)];
       if (!d.estimated.count(method)) d.methods.push_back(method);
       d.estimated[method].push_back(
-          {e.Number(i, t), Eigen::Vector3d(e.Number(i, x), e.Number(i, y), e.Number(i, z))});
+          {e.Number(i, t), Eigen::Vector3d(e.Number(i, x), e.Number(i, y), e.Number(i, z)),
+           track < 0 ? 0 : static_cast<long>(e.Number(i, track))});
     }
   }
   // Methods that ran but never estimated still get a row in the tables.
@@ -542,21 +574,22 @@ void PlotNodes(GnuplotFigure& figure, const Table& layout, const LayoutColumns& 
   }
 }
 
-Figure TopView(const RunData& d, const RunReportOptions& o, std::vector<std::string>* warnings) {
-  const std::string png = "report/top_view.png";
-  const std::string caption =
-      "Top view: buildings shaded by height, trees green; each node with its horizontal field of "
-      "view (dashed: boresight azimuth +- half the field of view across the image or scan); the "
-      "base station; the true path (black) and every method's estimates (dots).";
+// The top view's map, fields of view and nodes, with `paths` drawing the
+// paths and estimates over the map.
+Figure TopViewWith(const RunData& d, const RunReportOptions& o, const std::string& png,
+                   const std::string& caption, const std::function<void(GnuplotFigure&)>& paths,
+                   std::vector<std::string>* warnings) {
   if (!d.layout || !d.truth)
     return NotDrawn(png, caption,
                     "the run has no " + std::string(!d.layout ? "layout.csv" : "truth.csv") +
                         " (made by an older uavsim)",
                     warnings);
-  // The plotted square: the cells of world_top.csv, the nodes and the path.
+  // The plotted square: the cells of world_top.csv, the nodes and the paths.
   const Table& layout = *d.layout;
   const LayoutColumns lc = ColumnsOf(layout);
   Extent extent = PathAndNodesExtent(d, layout, lc);
+  for (const TargetPath& target : d.targets)
+    for (const auto& p : target.p) extent.Add(p.x(), p.y());
   const WorldCells cells = ReadWorldCells(d);
   // The map's cells reach as far as the world_top.csv grid has anything.
   if (d.world_top)
@@ -568,10 +601,163 @@ Figure TopView(const RunData& d, const RunReportOptions& o, std::vector<std::str
   PlotWorldCells(figure, cells);
   const std::map<std::string, std::string> node_kind = LabelNodes(figure, layout, lc);
   PlotFieldsOfView(figure, layout, lc, node_kind);
-  PlotPathAndEstimates(figure, d);
+  paths(figure);
   PlotNodes(figure, layout, lc);
   figure.Plot();
   return Draw(d, o, png, caption, figure, 1000, 760, warnings);
+}
+
+Figure TopView(const RunData& d, const RunReportOptions& o, std::vector<std::string>* warnings) {
+  return TopViewWith(
+      d, o, "report/top_view.png",
+      "Top view: buildings shaded by height, trees green; each node with its horizontal field of "
+      "view (dashed: boresight azimuth +- half the field of view across the image or scan); the "
+      "base station; the true path (black) and every method's estimates (dots)." +
+          std::string(d.targets.size() > 1 ? " With several targets: the first one's path." : ""),
+      [&](GnuplotFigure& figure) { PlotPathAndEstimates(figure, d); }, warnings);
+}
+
+// ---------------------------------------------------------------------------
+// Several targets
+
+constexpr const char* kTargetColours[] = {"#1b9e77", "#d95f02", "#7570b3", "#e7298a",
+                                          "#66a61e", "#e6ab02", "#a6761d", "#17becf"};
+
+std::string TargetColour(std::size_t k) {
+  return kTargetColours[k % (sizeof kTargetColours / sizeof *kTargetColours)];
+}
+
+// The methods that report labelled tracks (a track column above 0).
+std::vector<std::string> Trackers(const RunData& d) {
+  std::vector<std::string> out;
+  for (const std::string& m : d.methods) {
+    const auto it = d.estimated.find(m);
+    if (it != d.estimated.end() && std::any_of(it->second.begin(), it->second.end(),
+                                               [](const Estimate& e) { return e.track > 0; }))
+      out.push_back(m);
+  }
+  return out;
+}
+
+// The target nearest p at t_s within c_m (its index), or -1.
+long NearestTarget(const RunData& d, double t_s, const Eigen::Vector3d& p, double c_m) {
+  long best = -1;
+  double best_d = c_m;
+  for (std::size_t k = 0; k < d.targets.size(); ++k) {
+    const TargetPath& target = d.targets[k];
+    const auto it = std::lower_bound(target.t.begin(), target.t.end(), t_s - 1e-9);
+    if (it == target.t.end()) continue;
+    const double dist = (target.p[static_cast<std::size_t>(it - target.t.begin())] - p).norm();
+    if (dist < best_d) best = static_cast<long>(k), best_d = dist;
+  }
+  return best;
+}
+
+// Each target's path in its colour; the trackers' track points in the
+// colour of the target nearest them (within GOSPA's c), grey beyond.
+void PlotTargetsAndTracks(GnuplotFigure& figure, const RunData& d) {
+  const double c_m =
+      At(d.metrics, "/gospa/c_m").is_number() ? At(d.metrics, "/gospa/c_m").get<double>() : 10.0;
+  std::vector<std::string> points(d.targets.size() + 1);
+  for (const std::string& method : Trackers(d))
+    for (const Estimate& e : d.estimated.at(method)) {
+      if (e.track <= 0) continue;
+      const long k = NearestTarget(d, e.t_s, e.p, c_m);
+      points[k < 0 ? d.targets.size() : static_cast<std::size_t>(k)] +=
+          ShortestNumber(e.p.x()) + " " + ShortestNumber(e.p.y()) + "\n";
+    }
+  for (std::size_t k = 0; k < d.targets.size(); ++k) {
+    std::string path;
+    for (const auto& p : d.targets[k].p)
+      path += ShortestNumber(p.x()) + " " + ShortestNumber(p.y()) + "\n";
+    const std::string n = std::to_string(k);
+    figure.Data("target" + n, path);
+    figure.Text("uavsim_target" + n, d.targets[k].id);
+    figure.Curve("$target" + n + " using 1:2 with lines lw 2 lc rgb '" + TargetColour(k) +
+                 "' title uavsim_target" + n);
+    if (points[k].empty()) continue;
+    figure.Data("tracked" + n, points[k]);
+    figure.Curve("$tracked" + n + " using 1:2 with points pt 7 ps 0.5 lc rgb '" + TargetColour(k) +
+                 "' notitle");
+  }
+  if (!points.back().empty()) {
+    figure.Data("false_tracks", points.back());
+    figure.Curve(
+        "$false_tracks using 1:2 with points pt 6 ps 0.5 lc rgb '#555555' title 'no target near'");
+  }
+}
+
+Figure TargetsTopView(const RunData& d, const RunReportOptions& o,
+                      std::vector<std::string>* warnings) {
+  const std::vector<std::string> trackers = Trackers(d);
+  std::string names;
+  for (const std::string& m : trackers) names += (names.empty() ? "" : ", ") + m;
+  return TopViewWith(
+      d, o, "report/targets_top_view.png",
+      "Several targets: each target's true path in its colour, and every track point of " +
+          (names.empty() ? std::string("the trackers (none ran)") : names) +
+          " in the colour of the target nearest it (within GOSPA's cut-off c; grey circles: no "
+          "target that near: a bird, a ghost, a lost track).",
+      [&](GnuplotFigure& figure) { PlotTargetsAndTracks(figure, d); }, warnings);
+}
+
+// gospa.csv's `column` per method against time.
+Figure GospaTime(const RunData& d, const RunReportOptions& o, std::vector<std::string>* warnings) {
+  const std::string png = "report/gospa_time.png";
+  const std::string caption =
+      "Several targets: GOSPA (p = 2, alpha = 2, cut-off c) of each method's estimates at every "
+      "window's end (top), and the parts of the first tracker's (else the first method's): the "
+      "localization error of the assigned pairs and c^2/2 per missed target and per false "
+      "estimate (bottom; m^2). gospa.csv.";
+  if (!d.gospa) return NotDrawn(png, caption, "the run has no gospa.csv", warnings);
+  const Table& g = *d.gospa;
+  const long t = g.Column("t_s"), m = g.Column("method"), v = g.Column("gospa_m");
+  const long parts[] = {g.Column("localization_m2"), g.Column("missed_m2"), g.Column("false_m2")};
+  const std::vector<std::string> trackers = Trackers(d);
+  const std::string focus = !trackers.empty()   ? trackers.front()
+                            : d.methods.empty() ? std::string()
+                                                : d.methods.front();
+  std::map<std::string, std::string> rows;
+  std::string part_rows[3];
+  for (std::size_t i = 0; i < g.rows.size(); ++i) {
+    const std::string& method = g.rows[i][static_cast<std::size_t>(m)];
+    rows[method] += ShortestNumber(g.Number(i, t)) + " " + ShortestNumber(g.Number(i, v)) + "\n";
+    if (method == focus)
+      for (int p = 0; p < 3; ++p)
+        part_rows[p] +=
+            ShortestNumber(g.Number(i, t)) + " " + ShortestNumber(g.Number(i, parts[p])) + "\n";
+  }
+  GnuplotFigure figure;
+  std::ostream& gp = figure.Commands();
+  gp << "set multiplot\nset lmargin at screen 0.08\nset rmargin at screen 0.80\n"
+     << "set tmargin at screen 0.93\nset bmargin at screen 0.55\nset format x ''\nset grid\n"
+     << "set title "
+     << GnuplotString("GOSPA vs time: " + d.scenario.value("name", std::string("run")))
+     << "\nset ylabel 'GOSPA (m)'\nset yrange [0:*]\nset key outside right top\n";
+  std::size_t k = 0;
+  for (const std::string& method : d.methods) {
+    if (!rows.count(method)) continue;
+    figure.Data("g" + std::to_string(k), rows[method]);
+    figure.Text("uavsim_method" + std::to_string(k), method);
+    figure.Curve("$g" + std::to_string(k) + " using 1:2 with lines lw 1.5 lc rgb '" +
+                 MethodColour(d, method) + "' title uavsim_method" + std::to_string(k));
+    ++k;
+  }
+  if (!figure.HasCurves()) return NotDrawn(png, caption, "gospa.csv has no rows", warnings);
+  figure.Plot(CurveLayout::kOneLine);
+  gp << "unset title\nset tmargin at screen 0.50\nset bmargin at screen 0.09\nset format x '%g'\n"
+     << "set xlabel 'Simulated time (s)'\nset ylabel " << GnuplotString(focus + ": parts (m^2)")
+     << "\n";
+  const char* names[] = {"localization", "missed", "false"};
+  const char* colours[] = {"#1b9e77", "#d95f02", "#7570b3"};
+  for (int p = 0; p < 3; ++p) {
+    figure.Data(std::string("part_") + names[p], part_rows[p].empty() ? "NaN NaN\n" : part_rows[p]);
+    figure.Curve(std::string("$part_") + names[p] + " using 1:2 with lines lw 1.5 lc rgb '" +
+                 colours[p] + "' title '" + names[p] + "'");
+  }
+  figure.Plot(CurveLayout::kOneLine);
+  gp << "unset multiplot\n";
+  return Draw(d, o, png, caption, figure, 1100, 620, warnings);
 }
 
 // The upper plot: each method's error vs time, on a logarithmic axis when
@@ -740,6 +926,11 @@ Figure LatencyFigure(const RunData& d, const Packets& p, CsvTable* csv, const Ru
 // rate_snr.png from rate_snr.csv (every window; a method without an
 // estimate yet scores gain 0) or, `common`, rate_snr_common.png from
 // rate_snr_common.csv (the windows every steering method estimated).
+Figure DrawRates(const RunData& d, const RunReportOptions& o, const std::string& png,
+                 const std::string& caption, const std::string& title, const std::string& y_label,
+                 const std::vector<std::string>& beams, std::map<std::string, std::string>& rows,
+                 std::vector<std::string>* warnings);
+
 Figure RateSnr(const RunData& d, bool common, const RunReportOptions& o,
                std::vector<std::string>* warnings) {
   const std::string stem = common ? "rate_snr_common" : "rate_snr";
@@ -768,6 +959,41 @@ Figure RateSnr(const RunData& d, bool common, const RunReportOptions& o,
   if (beams.empty() && common)
     return {png, caption, "no window in which every method that steers a beam had an estimate"};
   if (beams.empty()) return NotDrawn(png, caption, stem + ".csv has no rows", warnings);
+  return DrawRates(d, o, png, caption,
+                   std::string(common ? "On common windows: " : "Achievable rate vs SNR: "),
+                   "Rate (bit/s/Hz)", beams, rows, warnings);
+}
+
+// Sum rate vs SNR (rate_snr_targets.csv's "sum" rows), a curve per beam set.
+Figure SumRateSnr(const RunData& d, const RunReportOptions& o, std::vector<std::string>* warnings) {
+  const std::string png = "rate_snr_targets.png";
+  const std::string caption =
+      "Several targets: the sum over the targets of each one's achievable rate vs SNR, the base "
+      "station pointing a beam at every estimate a method has (equal power each; each target "
+      "served by the beam assigned to it, the others' leakage as interference) and, as the "
+      "reference, at every target's true position (perfect). Per target: rate_snr_targets.csv.";
+  if (!d.rate_snr_targets)
+    return NotDrawn(png, caption, "the run has no rate_snr_targets.csv", warnings);
+  const Table& t = *d.rate_snr_targets;
+  const long sc = t.Column("snr_db"), bc = t.Column("beam"), tc = t.Column("target"),
+             rc = t.Column("rate_bps_hz");
+  std::vector<std::string> beams;
+  std::map<std::string, std::string> rows;
+  for (std::size_t i = 0; i < t.rows.size(); ++i) {
+    if (t.rows[i][static_cast<std::size_t>(tc)] != "sum") continue;
+    const std::string& beam = t.rows[i][static_cast<std::size_t>(bc)];
+    if (!rows.count(beam)) beams.push_back(beam);
+    rows[beam] += ShortestNumber(t.Number(i, sc)) + " " + ShortestNumber(t.Number(i, rc)) + "\n";
+  }
+  if (beams.empty()) return NotDrawn(png, caption, "rate_snr_targets.csv has no rows", warnings);
+  return DrawRates(d, o, png, caption, "Sum rate vs SNR: ", "Sum rate (bit/s/Hz)", beams, rows,
+                   warnings);
+}
+
+Figure DrawRates(const RunData& d, const RunReportOptions& o, const std::string& png,
+                 const std::string& caption, const std::string& title, const std::string& y_label,
+                 const std::vector<std::string>& beams, std::map<std::string, std::string>& rows,
+                 std::vector<std::string>* warnings) {
   GnuplotFigure figure;
   for (std::size_t k = 0; k < beams.size(); ++k) {
     figure.Data("b" + std::to_string(k), rows[beams[k]]);
@@ -780,17 +1006,32 @@ Figure RateSnr(const RunData& d, bool common, const RunReportOptions& o,
                  " using 1:2 with linespoints pt 7 ps 0.6 lw 1.5 lc rgb '" + colour +
                  "' title uavsim_beam" + std::to_string(k));
   }
-  figure.Commands()
-      << "set title "
-      << GnuplotString(std::string(common ? "On common windows: " : "Achievable rate vs SNR: ") +
-                       d.scenario.value("name", std::string("run")))
-      << "\nset xlabel 'SNR (dB)'\nset ylabel 'Rate (bit/s/Hz)'\nset grid\nset key top left\n";
+  figure.Commands() << "set title "
+                    << GnuplotString(title + d.scenario.value("name", std::string("run")))
+                    << "\nset xlabel 'SNR (dB)'\nset ylabel " << GnuplotString(y_label)
+                    << "\nset grid\nset key top left\n";
   figure.Plot(CurveLayout::kOneLine);
   return Draw(d, o, png, caption, figure, 800, 560, warnings);
 }
 
 // ---------------------------------------------------------------------------
 // The page's tables
+
+// metrics.json's gospa: a row per method.
+std::vector<std::vector<std::string>> GospaRows(const RunData& d) {
+  std::vector<std::vector<std::string>> rows{
+      {"method", "GOSPA RMS (m)", "OSPA RMS (m)", "missed / window", "false / window",
+       "cardinality error", "identity switches", "fragmentations"}};
+  const Json methods = At(d.metrics, "/gospa/methods");
+  if (!methods.is_object()) return {};
+  for (const auto& [method, g] : methods.items())
+    rows.push_back({method, JsonFixed(g, "rms_m", 2), JsonFixed(g, "ospa_rms_m", 2),
+                    JsonFixed(g, "missed_per_window", 2), JsonFixed(g, "false_per_window", 2),
+                    JsonFixed(g, "cardinality_error", 2),
+                    JsonText(g.value("identity_switches", Json(nullptr))),
+                    JsonText(g.value("fragmentations", Json(nullptr)))});
+  return rows;
+}
 
 std::vector<std::vector<std::string>> RmseRows(const RunData& d, const Errors& errors) {
   std::vector<std::vector<std::string>> rows{{"method", "RMSE (m)", "windows estimated",
@@ -978,6 +1219,7 @@ std::vector<Figure> WriteReception(const RunData& d, const std::optional<Packets
 struct ReportFigures {
   std::vector<Figure> reception;
   Figure top, error_time, rate, rate_common;
+  std::optional<Figure> targets_top, gospa_time, sum_rate;  // several targets, or mtt
 };
 
 std::string Headline(const RunData& d) {
@@ -992,10 +1234,10 @@ std::string Headline(const RunData& d) {
 std::string FileLinks(const RunData& d) {
   std::error_code ec;
   std::string links;
-  for (const char* f :
-       {"manifest.json", "metrics.json", "truth.csv", "estimates.csv", "packets.csv",
-        "rate_snr.csv", "rate_snr_common.csv", "world_top.csv", "layout.csv", "report/errors.csv",
-        "report/windows.csv", "report/packets_by_fate.csv", "report/latency.csv"}) {
+  for (const char* f : {"manifest.json", "metrics.json", "truth.csv", "estimates.csv",
+                        "packets.csv", "rate_snr.csv", "rate_snr_common.csv", "gospa.csv",
+                        "rate_snr_targets.csv", "world_top.csv", "layout.csv", "report/errors.csv",
+                        "report/windows.csv", "report/packets_by_fate.csv", "report/latency.csv"}) {
     if (!fs::is_regular_file(d.dir / f, ec)) continue;
     links += std::string(links.empty() ? "" : " · ") + "<a href=\"" + HtmlEscape(f) + "\">" +
              HtmlEscape(f) + "</a>";
@@ -1016,6 +1258,20 @@ std::string RunPage(const RunData& d, const Errors& errors, const ReportFigures&
       "errors (report/errors.csv).");
   AddFigure(page, figures.top);
   AddFigure(page, figures.error_time);
+  if (const auto rows = GospaRows(d); !rows.empty()) {
+    page.Heading("Several targets");
+    page.Table(rows);
+    page.Paragraph(
+        "GOSPA (p = 2, alpha = 2, cut-off c = " + JsonFixed(At(d.metrics, "/gospa"), "c_m", 1) +
+        " m) of each method's estimates as a set against every target, per window, RMS over the "
+        "windows; OSPA likewise; the missed targets and false estimates per window; the mean "
+        "|estimates - targets|; a target's identity switch is an assignment to another track "
+        "label than its last, a fragmentation an assignment after windows without one. Per "
+        "target RMSE in metrics.json (gospa.methods.<method>.per_target).");
+    if (figures.targets_top) AddFigure(page, *figures.targets_top);
+    if (figures.gospa_time) AddFigure(page, *figures.gospa_time);
+    if (figures.sum_rate) AddFigure(page, *figures.sum_rate);
+  }
   page.Heading("Uplink: what reached the edge");
   page.Table(ReceptionRows(d));
   page.BeginRow();
@@ -1064,6 +1320,11 @@ std::vector<std::string> WriteRunReport(const std::string& dir, const RunReportO
   figures.error_time = ErrorTime(d, errors, packets, options, &warnings);
   figures.rate = RateSnr(d, false, options, &warnings);
   figures.rate_common = RateSnr(d, true, options, &warnings);
+  if (d.gospa) {
+    if (d.targets.size() > 1) figures.targets_top = TargetsTopView(d, options, &warnings);
+    figures.gospa_time = GospaTime(d, options, &warnings);
+    if (d.rate_snr_targets) figures.sum_rate = SumRateSnr(d, options, &warnings);
+  }
   core::WriteFileAtomic((d.dir / "report.html").string(), RunPage(d, errors, figures));
   return warnings;
 }

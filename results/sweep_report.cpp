@@ -134,7 +134,7 @@ PointRates ParseRateSnr(const SweepPoint& point) {
 // ---------------------------------------------------------------------------
 // The metric columns and each point's values
 
-enum class Kind { kRmse, kCoverage, kDelivery, kRate };
+enum class Kind { kRmse, kCoverage, kDelivery, kGospa, kRate };
 
 struct Metric {
   std::string name;  // summary.csv column
@@ -177,13 +177,20 @@ Value DeliveryOf(const core::Json& metrics, const std::string& modality) {
   return delivered.get<double>() / sent.get<double>();
 }
 
-// The keys of metrics.<field> (an object) over all points, sorted.
+// gospa.methods.<method>.rms_m (several targets, or a multi-target method).
+Value GospaOf(const core::Json& metrics, const std::string& method) {
+  const core::Json::json_pointer p("/gospa/methods/" + method + "/rms_m");
+  if (!metrics.contains(p) || !metrics[p].is_number()) return std::nullopt;
+  return metrics[p].get<double>();
+}
+
+// The keys of the object at metrics' pointer `field` over all points, sorted.
 std::set<std::string> KeysOver(const std::vector<SweepPoint>& points, const char* field) {
   std::set<std::string> keys;
+  const core::Json::json_pointer at(std::string("/") + field);
   for (const auto& p : points)
-    if (p.metrics.contains(field) && p.metrics[field].is_object())
-      for (auto it = p.metrics[field].begin(); it != p.metrics[field].end(); ++it)
-        keys.insert(it.key());
+    if (p.metrics.contains(at) && p.metrics[at].is_object())
+      for (auto it = p.metrics[at].begin(); it != p.metrics[at].end(); ++it) keys.insert(it.key());
   return keys;
 }
 
@@ -199,6 +206,8 @@ std::vector<Metric> CollectMetrics(const SweepReportInputs& in,
     metrics.push_back({"coverage_" + CleanCell(method), Kind::kCoverage, method, 0.0, ""});
   for (const auto& modality : KeysOver(in.points, "modalities"))
     metrics.push_back({"delivery_" + CleanCell(modality), Kind::kDelivery, modality, 0.0, ""});
+  for (const auto& method : KeysOver(in.points, "gospa/methods"))
+    metrics.push_back({"gospa_" + CleanCell(method), Kind::kGospa, method, 0.0, ""});
   std::vector<std::string> beams;
   std::map<double, std::string> snrs;
   for (const auto& r : rates) {
@@ -225,6 +234,8 @@ Value ValueOf(const SweepPoint& point, const PointRates& rates, const Metric& m)
       return CoverageOf(point.metrics, m.key);
     case Kind::kDelivery:
       return DeliveryOf(point.metrics, m.key);
+    case Kind::kGospa:
+      return GospaOf(point.metrics, m.key);
     case Kind::kRate: {
       const auto it = rates.rate.find({m.key, m.snr_db});
       return it == rates.rate.end() ? std::nullopt : Value(it->second);
@@ -528,6 +539,7 @@ void WriteAxisPlots(const Report& r, const fs::path& plots, std::vector<std::str
       {Kind::kRmse, "rmse_", "localisation RMSE", "RMSE (m)"},
       {Kind::kCoverage, "coverage_", "estimate coverage", "Windows with an estimate (share)"},
       {Kind::kDelivery, "delivery_", "delivery ratio", "Delivery ratio (on time / sent)"},
+      {Kind::kGospa, "gospa_", "GOSPA (RMS over windows)", "GOSPA (m)"},
   };
   for (const auto& a : r.in.axes) {
     const auto xs = AxisValuesPresent(r, a);
@@ -687,6 +699,8 @@ std::vector<Section> WriteAxisPanels(const Report& r, const fs::path& plots,
        "share of windows with an estimate", "Windows with an estimate (share)", "method", true},
       {Kind::kDelivery, "panels_delivery_", "Uplink delivery", "uplink delivery ratio",
        "Delivery ratio (on time / sent)", "modality", true},
+      {Kind::kGospa, "panels_gospa_", "Several targets: GOSPA", "GOSPA (RMS over windows)",
+       "GOSPA (m)", "method", false},
   };
   std::vector<Section> sections;
   for (const auto& f : families) {
@@ -846,6 +860,7 @@ std::string ReportPage(const Report& r, const std::vector<Section>& sections) {
       {Kind::kRmse, "RMSE per setting (m, mean \u00b1 95 % CI over seeds)", false},
       {Kind::kCoverage, "Coverage per setting (share of windows, mean \u00b1 95 % CI)", true},
       {Kind::kDelivery, "Delivery per setting (on time / sent, mean \u00b1 95 % CI)", true},
+      {Kind::kGospa, "GOSPA per setting (m, mean \u00b1 95 % CI over seeds)", false},
   };
   bool explained = false;
   for (const auto& t : tables) {

@@ -60,6 +60,8 @@ struct SweepReportInputs {
 //                                        the share of windows its RMSE covers
 //                   delivery_<modality>  packets_delivered / packets_sent
 //                                        (missing when nothing was sent)
+//                   gospa_<method>       gospa.methods.<method>.rms_m (several
+//                                        targets or a multi-target method)
 //                   rate_<beam>_<snr>dB  rate_snr.csv, SNR with trailing
 //                                        zeros trimmed ("rate_ekf_-10dB")
 //                 methods and modalities sorted by name over all points,
@@ -70,16 +72,13 @@ struct SweepReportInputs {
 //                 width t_{0.975,n-1} s / sqrt(n) over the n points having a
 //                 value; ci95 empty for n < 2, mean for n = 0).
 //  plots/         per axis with >= 2 x values present: rmse_<stem>,
-//                 coverage_<stem> and delivery_<stem> (mean with 95 % error bars, a line per
-//                 method or modality and combination of the other
-//                 parameters, named like "uavloc; weather=fog 100 m": the
-//                 other parameters that vary, ", " made "; " as in any
-//                 cell); per setting k: rate_snr_<kkk> (rate vs SNR, a line
-//                 per beam). Each a long CSV "x,y,ci95,series" beside its
-//                 PNG.
-//                 Small multiples (results/panel_plot.h), each a long CSV
-//                 "x,y,ci95,series,panel" beside its PNG: per axis with >= 2
-//                 x values panels_rmse_<stem>, panels_coverage_<stem> and
+//                 coverage_<stem>, delivery_<stem> and gospa_<stem> (mean with 95 % error bars, a
+//                 line per method or modality and combination of the other parameters, named like
+//                 "uavloc; weather=fog 100 m": the other parameters that vary, ", " made "; " as in
+//                 any cell); per setting k: rate_snr_<kkk> (rate vs SNR, a line per beam). Each a
+//                 long CSV "x,y,ci95,series" beside its PNG. Small multiples
+//                 (results/panel_plot.h), each a long CSV "x,y,ci95,series,panel" beside its PNG:
+//                 per axis with >= 2 x values panels_rmse_<stem>, panels_coverage_<stem> and
 //                 panels_delivery_<stem>, a panel per combination of the
 //                 other parameters that vary ("weather=fog 100 m"; "" if
 //                 none does), a series per method or modality with a value

@@ -24,7 +24,8 @@ bool Runs(const Scenario& s, const std::string& method) {
 // name.
 std::vector<std::string> MethodOrder(const Scenario& s) {
   std::vector<std::string> order;
-  for (const char* fixed : {"uavloc", "uavloc_anchored", "anchor_track", "ekf"})
+  for (const char* fixed :
+       {"uavloc", "uavloc_anchored", "anchor_track", "ekf", "mtt", "uavloc_per_track"})
     if (Runs(s, fixed)) order.push_back(fixed);
   std::set<std::string> learned, scripted, hosted;
   for (const std::string& method : s.pipeline.methods) {
@@ -51,6 +52,8 @@ std::vector<std::unique_ptr<pipeline::LocalizationMethod>> MakeMethods(
       methods.push_back(pipeline::MakeEkfMethod(MakeEkf(s)));
     else if (name == "anchor_track")
       methods.push_back(pipeline::MakeAnchorTrackMethod(s.pipeline.window_s));
+    else if (name == "mtt")
+      methods.push_back(pipeline::MakeMttMethod(s.pipeline.window_s));
     else if (auto method = catalog.MakeMethod(name))
       methods.push_back(std::move(method));
   }
@@ -157,6 +160,7 @@ EdgeServer::EdgeServer(const Scenario& s, const std::string& scenario_file, bool
     needs_.arrivals |= m->needs().arrivals;
     needs_.latents |= m->needs().latents;
     needs_.anchors |= m->needs().anchors;
+    needs_.detections |= m->needs().detections;
   }
 }
 
@@ -210,11 +214,29 @@ bool EdgeServer::OnArrival(const channel::Message& m, core::SimTime t_arrival) {
   }
   if (needs_.anchors && anchor.kind != pipeline::GeometricAnchor::Kind::kNone)
     pending_[k].anchors[modality].push_back(anchor);
+  if (needs_.detections) AddDetections(k, m, content);
   if (keep_arrivals_)
     pending_records_[k].push_back({content.node_id, m.modality, t_capture_s, content.latent,
                                    content.camera ? pipeline::AnchorOf(*content.camera)
                                                   : pipeline::AnchorOf(*content.points)});
   return true;
+}
+
+void EdgeServer::AddDetections(std::int64_t k, const channel::Message& m,
+                               const NodeContent& content) {
+  std::vector<pipeline::Detection>& out = pending_[k].detections;
+  const auto add = [&](const NodeObservation& o) {
+    if (!o.Found()) return;
+    pipeline::Detection d;
+    d.modality = m.modality;
+    d.node = m.node;
+    d.t_capture_s = core::ToSeconds(m.t_capture_ns);
+    d.anchor = o.camera ? pipeline::AnchorOf(*o.camera) : pipeline::AnchorOf(*o.points);
+    d.latent = o.latent;
+    if (d.anchor.kind != pipeline::GeometricAnchor::Kind::kNone) out.push_back(std::move(d));
+  };
+  add(content);
+  for (const NodeObservation& o : content.further) add(o);
 }
 
 std::map<std::string, Eigen::Vector3d> EdgeServer::EstimateWindow(std::int64_t tick, double t_s) {
@@ -234,9 +256,11 @@ std::map<std::string, Eigen::Vector3d> EdgeServer::EstimateWindow(std::int64_t t
   w.t_end_s = t_s;
   w.latents.window = k;
   std::map<std::string, Eigen::Vector3d> estimated;
+  last_tracks_.clear();
   for (const auto& method : methods_) {
     const auto timing = core::WallProfile::Measure(profile_, "edge/" + method->name());
     if (const auto p = method->Estimate(w)) estimated[method->name()] = *p;
+    if (auto tracks = method->Tracks()) last_tracks_[method->name()] = std::move(*tracks);
   }
   return estimated;
 }

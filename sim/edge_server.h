@@ -9,11 +9,11 @@
 // list: ekf (the classical baseline), uavloc (the paper's pipeline),
 // uavloc_camera/_lidar/_radar and NAME[SUBSET] (it or a variant fed a subset
 // of the modalities), the paper's variants (gru, no_mica, ...),
-// uavloc_anchored (our anchored head), anchor_track (its filter alone) and
-// users' TorchScript models; pipeline/model_catalog.h resolves the learned
-// and TorchScript ones to their model folders, once per run.
-// The nodes send their geometric anchors with their latents only when
-// uavloc_anchored or anchor_track runs (MessageBytes counts them).
+// uavloc_anchored (our anchored head), anchor_track (its filter alone),
+// mtt (the multi-target tracker) and users' TorchScript models; pipeline/model_catalog.h resolves
+// the learned and TorchScript ones to their model folders, once per run. The nodes send their
+// geometric anchors with their latents only when uavloc_anchored or anchor_track runs (MessageBytes
+// counts them).
 //
 // Determinism: no randomness of its own; LibTorch is seeded from the
 // scenario's seed when a model is loaded.
@@ -104,6 +104,12 @@ class EdgeServer {
   // estimate of the target (world ENU, metres), absent where it has none yet.
   std::map<std::string, Eigen::Vector3d> EstimateWindow(std::int64_t tick, double t_s);
 
+  // The multi-target methods' labelled estimates of the window
+  // EstimateWindow last estimated (sim/window_scorer.h scores them as sets).
+  const std::map<std::string, std::vector<pipeline::TrackEstimate>>& last_tracks() const {
+    return last_tracks_;
+  }
+
   // What reached the edge on time, kept per window for a host that steps
   // the run (apps/python's environment): off by default.
   struct ArrivalRecord {
@@ -151,6 +157,9 @@ class EdgeServer {
   bool keep_arrivals_ = false;
   std::map<std::int64_t, std::vector<ArrivalRecord>> pending_records_;
   std::vector<ArrivalRecord> last_arrivals_;
+  std::map<std::string, std::vector<pipeline::TrackEstimate>> last_tracks_;
+  // Every observation of the message into window k's detections.
+  void AddDetections(std::int64_t k, const channel::Message& m, const NodeContent& content);
   core::WallProfile* profile_ = nullptr;
 };
 

@@ -238,14 +238,13 @@ RunSummary RunScenario(const Scenario& s, const RunOptions& o) {
         const Eigen::Vector3d truth_m = world.target().StateAt(t_s).position_m;
         if (collector) return collector->OnWindow(t_window_end, truth_m);
         std::vector<Eigen::Vector3d> targets_m;
-        if (world.targets().size() > 1)
-          for (std::size_t i : world.targets())
-            targets_m.push_back(world.uav(i).StateAt(t_s).position_m);
+        for (std::size_t i : world.targets())
+          targets_m.push_back(world.uav(i).StateAt(t_s).position_m);
         const auto estimated = edge.EstimateWindow(tick, t_s);
         std::map<std::string, Eigen::Vector3d> scored;
         {
           const auto timing = core::WallProfile::Measure(&profile, "beams");
-          scored = scores->Score(t_s, truth_m, estimated, world, targets_m);
+          scored = scores->Score(t_s, truth_m, estimated, world, targets_m, edge.last_tracks());
         }
         if (o.on_window) o.on_window({tick + 1, t_s, &truth_m, &scored, &edge, &*scores});
         const auto timing =

@@ -13,9 +13,10 @@
 namespace uavsim::sim {
 namespace {
 
-// metrics.json's "gospa" (several targets): per method the RMS of GOSPA and
-// of OSPA over the windows, the mean of GOSPA's parts and of the
-// cardinality error per window, and each target's RMSE where assigned.
+// metrics.json's "gospa" (several targets, or a multi-target method): per
+// method the RMS of GOSPA and of OSPA over the windows, the mean of GOSPA's
+// parts and of the cardinality error per window, each target's RMSE where
+// assigned, and the identity switches and fragmentations over the run.
 core::Json GospaJson(const FinishedRun& run) {
   core::Json methods = core::Json::object();
   const std::vector<std::size_t>& targets = run.world.targets();
@@ -36,7 +37,9 @@ core::Json GospaJson(const FinishedRun& run) {
                        {"missed_m2", g.missed_m2 / n},
                        {"false_m2", g.false_m2 / n},
                        {"missed_per_window", static_cast<double>(g.missed) / n},
-                       {"false_per_window", static_cast<double>(g.false_targets) / n}};
+                       {"false_per_window", static_cast<double>(g.false_targets) / n},
+                       {"identity_switches", g.identity_switches},
+                       {"fragmentations", g.fragmentations}};
   }
   return {{"c_m", run.scenario.outputs.gospa_c_m},
           {"p", 2},
@@ -145,6 +148,9 @@ void WriteRunTables(results::RunDirectory& dir, const FinishedRun& run) {
   dir.WriteText("layout.csv", LayoutTable(run.scenario, run.world).str());
   dir.WriteText("rate_snr.csv", run.scores.downlink().rates().Csv());
   dir.WriteText("rate_snr_common.csv", run.scores.downlink_common().rates().Csv());
+  if (run.scores.scores_sets()) dir.WriteText("gospa.csv", run.scores.gospa_windows().str());
+  if (const channel::MultiBeamScorer* m = run.scores.multi_beam())
+    dir.WriteText("rate_snr_targets.csv", m->Csv());
 }
 
 void WriteRunMetrics(results::RunDirectory& dir, const FinishedRun& run) {

@@ -529,7 +529,8 @@ const std::vector<std::pair<const char*, core::Json>>& LaterPreprocessKeys() {
         {"/radar/persistence_frames", d.radar.persistence_frames},
         {"/radar/min_support", d.radar.min_support},
         {"/radar/gate_m", d.radar.gate_m},
-        {"/radar/max_speed_mps", d.radar.max_speed_mps}};
+        {"/radar/max_speed_mps", d.radar.max_speed_mps},
+        {"/max_observations", d.max_observations}};
   }();
   return keys;
 }

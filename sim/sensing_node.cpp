@@ -45,6 +45,12 @@ bool HoldsTarget(const pipeline::PointObservation& obs, const core::Trajectory& 
   return false;
 }
 
+// The further point observations into the content (the found ones).
+void AddFurther(NodeContent& content, std::vector<pipeline::PointObservation>& further) {
+  for (auto& o : further)
+    if (o.count() > 0) content.further.push_back({{}, std::move(o), {}});
+}
+
 TargetSight LidarSight(const WorldModel& world, const sensors::PointCloudFrame& frame,
                        const pipeline::PointObservation& sent) {
   TargetSight s;
@@ -119,7 +125,9 @@ class CameraNodeSensor final : public NodeSensor {
     return [this, frame] {
       const core::WallProfile::Scope timing(c_.preprocess);
       NodeFrame out{frame->RawBytes(), {}, {}, {}};
-      out.content.camera = preprocess_.Process(*frame);
+      std::vector<pipeline::CameraObservation> further;
+      out.content.camera = preprocess_.Process(*frame, &further);
+      for (auto& o : further) out.content.further.push_back({std::move(o), {}, {}});
       if (c_.recorder)
         out.record = [recorder = c_.recorder, &id = c_.id, frame] {
           recorder->RecordCamera(id, *frame);
@@ -151,7 +159,9 @@ class LidarNodeSensor final : public NodeSensor {
     return [this, frame] {
       const core::WallProfile::Scope timing(c_.preprocess);
       NodeFrame out{frame->RawBytes(), {}, {}, {}};
-      out.content.points = preprocess_.Process(*frame);
+      std::vector<pipeline::PointObservation> further;
+      out.content.points = preprocess_.Process(*frame, &further);
+      AddFurther(out.content, further);
       out.sight = LidarSight(c_.world, *frame, *out.content.points);
       if (c_.recorder)
         out.record = [recorder = c_.recorder, &id = c_.id, frame] {
@@ -195,7 +205,9 @@ class RadarNodeSensor final : public NodeSensor {
     return [this, frame, raw_bytes] {
       const core::WallProfile::Scope timing(c_.preprocess);
       NodeFrame out{raw_bytes, {}, {}, {}};
-      out.content.points = preprocess_.Process(*frame);
+      std::vector<pipeline::PointObservation> further;
+      out.content.points = preprocess_.Process(*frame, &further);
+      AddFurther(out.content, further);
       out.sight = RadarSight(c_.world, *frame, *out.content.points);
       if (c_.recorder)
         out.record = [recorder = c_.recorder, &id = c_.id, frame] {
@@ -219,16 +231,22 @@ const NodeContent& ContentOf(const channel::Message& m) {
   return *content;
 }
 
-bool NodeContent::FoundSomething() const {
+bool NodeObservation::Found() const {
   return (camera && camera->detected) || (points && points->count() > 0);
 }
 
-std::uint64_t NodeContent::PreprocessedBytes() const {
-  if (!FoundSomething()) return 0;  // nothing to send
+std::uint64_t NodeObservation::PreprocessedBytes() const {
+  if (!Found()) return 0;  // nothing to send
   if (camera)
     return 2ull * pipeline::CameraObservation::kCropPx * pipeline::CameraObservation::kCropPx + 64;
   if (points) return 4ull * points->values.size();
   return 0;
+}
+
+std::uint64_t NodeContent::PreprocessedBytes() const {
+  std::uint64_t bytes = NodeObservation::PreprocessedBytes();
+  for (const NodeObservation& o : further) bytes += o.PreprocessedBytes();
+  return bytes;
 }
 
 NodeSensor::Preprocess NodeSensor::Acquire(double t_s, core::RngStream& noise) {
@@ -387,26 +405,36 @@ TracedFrame SensingNode::SenseFrame(core::SimTime t) {
   TracedFrame out{t, frame.raw_bytes, frame.sight, std::move(frame.content)};
   NodeContent& content = out.content;
   content.node_id = config_.id;
-  // The node sends its latent when it found something, else a bare header
+  // The node sends a latent per observation it found, else a bare header
   // ("nothing seen").
-  const bool found = content.FoundSomething();
-  if (found && wiring_.encoder) {
+  const bool found = content.Found();
+  if (wiring_.encoder && content.FoundSomething()) {
     const auto timing =
         core::WallProfile::Measure(wiring_.profile, "node/" + config_.id + "/encode");
-    content.latent = content.camera ? wiring_.encoder->Encode(*content.camera)
-                                    : wiring_.encoder->Encode(*content.points);
+    const auto encode = [&](NodeObservation& o) {
+      o.latent = o.camera ? wiring_.encoder->Encode(*o.camera) : wiring_.encoder->Encode(*o.points);
+    };
+    if (found) encode(content);
+    for (NodeObservation& o : content.further) encode(o);
   }
   if (found && wiring_.observer) wiring_.observer(*this, t_s, content);
-  // The latent travels, not the crops: the edge's filter needs the geometry only.
-  if (content.camera) content.camera->crop_left.clear(), content.camera->crop_right.clear();
+  // The latents travel, not the crops: the edge's filters need the geometry only.
+  const auto clear_crops = [](NodeObservation& o) {
+    if (o.camera) o.camera->crop_left.clear(), o.camera->crop_right.clear();
+  };
+  clear_crops(content);
+  for (NodeObservation& o : content.further) clear_crops(o);
   return out;
 }
 
 void SensingNode::Send(core::SimTime t, TracedFrame frame) {
   auto content = std::make_shared<NodeContent>(std::move(frame.content));
   content->node_id = config_.id;
-  const bool found = content->FoundSomething();
-  const std::uint32_t bytes_sent = found ? wiring_.message_bytes : channel::kMessageHeaderBytes;
+  const bool found = content->Found();
+  // The header, and per observation its latent (and anchor).
+  const std::uint32_t bytes_sent =
+      channel::kMessageHeaderBytes + static_cast<std::uint32_t>(content->ObservationCount()) *
+                                         (wiring_.message_bytes - channel::kMessageHeaderBytes);
   ++traffic_.frames;
   traffic_.raw_bytes += frame.raw_bytes;
   if (frame.sight) {

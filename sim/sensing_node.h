@@ -37,20 +37,35 @@ class SensingTraceReader;
 class SensingTraceWriter;
 struct TracedFrame;
 
-// What a node's message carries besides its size, opaque to the channel:
-// the pre-processed measurement (for the edge's classical filter and the
-// anchored head's anchors) and the IB-CC latent.
-struct NodeContent : channel::MessageContent {
-  std::string node_id;
+// One observation of a message: the pre-processed measurement (for the
+// edge's classical filters and the anchors) and its IB-CC latent.
+struct NodeObservation {
   std::optional<pipeline::CameraObservation> camera;
   std::optional<pipeline::PointObservation> points;
   std::vector<float> latent;  // the IB-CC mu, when a model runs and something was found
-  std::size_t sample = 0;     // set by a training collector: the frame's sample index
 
-  // Whether pre-processing found anything to send.
-  bool FoundSomething() const;
+  // Whether it holds anything (a detection, a point).
+  bool Found() const;
   // Bytes of the pre-processed observation: the two ROI crops at 8 bits
   // plus their geometry, or the points as float32; 0 when nothing was found.
+  std::uint64_t PreprocessedBytes() const;
+};
+
+// What a node's message carries besides its size, opaque to the channel:
+// the observation its pre-processing picked (the one single-target methods
+// see) and, with /pipeline/preprocess/max_observations > 1, the further
+// ones (each found; issue 46).
+struct NodeContent : channel::MessageContent, NodeObservation {
+  std::string node_id;
+  std::vector<NodeObservation> further;
+  std::size_t sample = 0;  // set by a training collector: the frame's sample index
+
+  // Whether pre-processing found anything to send.
+  bool FoundSomething() const { return Found() || !further.empty(); }
+  // The observations the message carries: the picked one when found, and
+  // the further ones.
+  std::size_t ObservationCount() const { return (Found() ? 1 : 0) + further.size(); }
+  // Of every observation the message carries.
   std::uint64_t PreprocessedBytes() const;
 };
 

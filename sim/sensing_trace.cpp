@@ -214,6 +214,15 @@ void SensingTraceWriter::Add(std::uint32_t node, const TracedFrame& f) {
     PutPoints(o, *f.content.points);
   }
   o.Floats(f.content.latent);
+  o.Put(static_cast<std::uint32_t>(f.content.further.size()));
+  for (const NodeObservation& further : f.content.further) {
+    o.Put(static_cast<std::uint8_t>(further.camera ? kCamera : 0));
+    if (further.camera)
+      PutCamera(o, *further.camera);
+    else
+      PutPoints(o, *further.points);
+    o.Floats(further.latent);
+  }
   ++frames_;
 }
 
@@ -270,6 +279,14 @@ SensingTraceReader::SensingTraceReader(const std::string& dir, const std::string
     else
       f.content.points = GetPoints(in);
     f.content.latent = in.Floats();
+    f.content.further.resize(in.Get<std::uint32_t>());
+    for (NodeObservation& further : f.content.further) {
+      if (in.Get<std::uint8_t>() & kCamera)
+        further.camera = GetCamera(in);
+      else
+        further.points = GetPoints(in);
+      further.latent = in.Floats();
+    }
     frames_[node].push_back(std::move(f));
     ++count;
   }

@@ -22,7 +22,9 @@
 // run (core/atomic_file.h):
 //   "UAVSIMTRACE\0" | u32 version | str key | u32 nodes | str id per node |
 //   frames: u8 1 | u32 node | i64 t_ns | u64 raw_bytes | u8 flags |
-//           observation | u32 n | f32 latent[n]
+//           observation | u32 n | f32 latent[n] |
+//           u32 further | per further observation: u8 flags | observation |
+//           u32 n | f32 latent[n]
 //   end:    u8 0 | u64 frame count
 // (str: u32 length and bytes; flags: 1 sight, 2 frame saw the target,
 // 4 what was sent holds it, 8 a camera observation; the camera observation
@@ -41,7 +43,7 @@
 
 namespace uavsim::sim {
 
-inline constexpr std::uint32_t kSensingTraceVersion = 1;
+inline constexpr std::uint32_t kSensingTraceVersion = 2;
 
 // One frame as its node sent it: the frame's time, its raw size, the
 // simulator's ground truth about it and the content (latent included,

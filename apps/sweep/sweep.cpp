@@ -32,6 +32,24 @@
 namespace uavsim::sim {
 namespace {
 
+// rate_snr_targets.csv's sum rows ("snr_db,beam,sum,rate") as rate_snr.csv
+// rows of a beam "sum_<beam>" (several targets: the sum rate of every
+// target's beam), so the report tabulates and draws them beside the beams.
+std::string SumRateRows(const std::string& targets_csv) {
+  std::string out;
+  std::size_t start = targets_csv.find('\n');  // past the header
+  while (start != std::string::npos && start + 1 < targets_csv.size()) {
+    const std::size_t end = targets_csv.find('\n', start + 1);
+    const std::string line = targets_csv.substr(
+        start + 1, end == std::string::npos ? std::string::npos : end - start - 1);
+    start = end;
+    const std::size_t a = line.find(','), b = line.find(',', a + 1), c = line.find(',', b + 1);
+    if (c == std::string::npos || line.compare(b + 1, c - b - 1, "sum") != 0) continue;
+    out += line.substr(0, a) + ",sum_" + line.substr(a + 1, b - a - 1) + line.substr(c) + "\n";
+  }
+  return out;
+}
+
 namespace fs = std::filesystem;
 using core::Json;
 
@@ -320,6 +338,8 @@ SweepOutcome MergeSweep(const std::string& dir) {
     std::error_code e2;
     if (fs::is_regular_file(run / "rate_snr.csv", e2))
       p.rate_snr_csv = core::ReadFileBytes((run / "rate_snr.csv").string());
+    if (fs::is_regular_file(run / "rate_snr_targets.csv", e2))
+      p.rate_snr_csv += SumRateRows(core::ReadFileBytes((run / "rate_snr_targets.csv").string()));
   }
   out.already_done = out.points;
   out.warnings = results::WriteSweepReport(dir, in);

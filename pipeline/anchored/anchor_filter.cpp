@@ -139,7 +139,12 @@ bool AnchorFilter::Update(const Measure& measure, const Eigen::Matrix<double, N,
     const auto [innovation, h] = measure(x_);
     const Eigen::LLT<MatrixN> llt(h * p_ * h.transpose() + noise);
     if (llt.info() != Eigen::Success) return false;
-    if (innovation.dot(llt.solve(innovation)) > kGate[N]) return false;
+    const double d2 = innovation.dot(llt.solve(innovation));
+    if (probe_) {
+      if (d2 <= kGate[N]) *probe_ = d2;
+      return false;
+    }
+    if (d2 > kGate[N]) return false;
   }
   // Each mode's Kalman update (Joseph form) and its log-likelihood (IMM
   // step 3): -d^2/2 - log det(2 pi S)/2. Committed once every mode's is.
@@ -255,9 +260,9 @@ void AnchorFilter::Observe(Modality m, const GeometricAnchor& a) {
   MaybeRestart(m, a, live);
 }
 
-void AnchorFilter::ObserveRay(const GeometricAnchor& a) {
+bool AnchorFilter::ObserveRay(const GeometricAnchor& a) {
   ray_ = a;
-  if (!started_) return;
+  if (!started_) return false;
   PredictTo(a.t_s);
   // An orthonormal pair normal to the ray.
   const Eigen::Vector3d& d = a.direction_w;
@@ -265,7 +270,7 @@ void AnchorFilter::ObserveRay(const GeometricAnchor& a) {
   const Eigen::Vector3d e2 = d.cross(e1);
   const double rho = std::max(1.0, (x_.head<3>() - a.origin_w).dot(d));
   const double var = std::pow(rho * kRaySigma_rad, 2) + kRayFloor_m * kRayFloor_m;
-  Update<2>(
+  return Update<2>(
       [&](const Vector10d& x) {
         const Eigen::Vector3d r = x.head<3>() - a.origin_w;
         Eigen::Matrix<double, 2, 10> h = Eigen::Matrix<double, 2, 10>::Zero();
@@ -341,12 +346,41 @@ void AnchorFilter::MaybeRestart(Modality m, const GeometricAnchor& a, bool live)
   }
 }
 
+void AnchorFilter::StartAt(Modality m, const GeometricAnchor& a) {
+  if (m == Modality::kCamera || a.kind != GeometricAnchor::Kind::kPoint)
+    throw std::invalid_argument("AnchorFilter::StartAt: a LiDAR or radar point, not a ray");
+  Start(a.origin_w, a.t_s, m == Modality::kRadar ? &a : nullptr);
+  pending_.reset();
+}
+
+std::optional<double> AnchorFilter::AssociationCost(Modality m, const GeometricAnchor& a) const {
+  std::optional<double> cost;
+  if (!started_ || a.kind == GeometricAnchor::Kind::kNone) return cost;
+  AnchorFilter copy = *this;
+  copy.probe_ = &cost;
+  copy.PredictTo(a.t_s);
+  if (a.kind == GeometricAnchor::Kind::kRay)
+    copy.ObserveRay(a);
+  else
+    copy.UpdateRanging(m, a);
+  return cost;
+}
+
+bool AnchorFilter::UpdateWith(Modality m, const GeometricAnchor& a) {
+  if (!started_ || a.kind == GeometricAnchor::Kind::kNone) return false;
+  if (a.kind == GeometricAnchor::Kind::kRay) return ObserveRay(a);
+  PredictTo(a.t_s);
+  const bool accepted = UpdateRanging(m, a);
+  if (accepted) last_ranging_s_ = t_s_;
+  return accepted;
+}
+
 std::optional<AnchorFilter::Estimate> AnchorFilter::PredictAt(double t_s) const {
   if (!started_ || t_s - last_ranging_s_ > kMaxPredict_s) return std::nullopt;
   AnchorFilter copy = *this;
   copy.PredictTo(t_s);
   return Estimate{copy.x_.head<3>(), std::sqrt(copy.p_.topLeftCorner<3, 3>().trace()),
-                  std::max(0.0, t_s - last_ranging_s_)};
+                  std::max(0.0, t_s - last_ranging_s_), copy.x_.segment<3>(3)};
 }
 
 }  // namespace uavsim::pipeline

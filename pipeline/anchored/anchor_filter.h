@@ -79,6 +79,7 @@ class AnchorFilter {
     Eigen::Vector3d position_m = Eigen::Vector3d::Zero();
     double sigma_m = 0.0;        // sqrt of the position covariance's trace
     double ranging_age_s = 0.0;  // since the last accepted LiDAR or radar fix
+    Eigen::Vector3d velocity_mps = Eigen::Vector3d::Zero();
   };
 
   // Anchors of one modality, in capture order across calls (an anchor older
@@ -92,6 +93,24 @@ class AnchorFilter {
   // has started or kMaxPredict_s after its last ranging update.
   std::optional<Estimate> PredictAt(double t_s) const;
   void Reset() { *this = AnchorFilter(motion_); }
+
+  // A multi-target tracker's use (pipeline/multitarget/gnn_tracker.h),
+  // which associates the fixes itself: no ray gate, no restarts.
+  // Starts (or restarts) the track at a LiDAR or radar fix, as Observe
+  // starts one (radar: at its own fix, with its radial velocity). Throws
+  // std::invalid_argument for a camera's ray.
+  void StartAt(Modality m, const GeometricAnchor& anchor);
+  // The cost of updating the track with the anchor at its capture time:
+  // the innovation's squared Mahalanobis distance d^2 (chi-square with the
+  // measurement's degrees of freedom), nothing outside the gate or before
+  // a start.
+  std::optional<double> AssociationCost(Modality m, const GeometricAnchor& anchor) const;
+  // The track predicted to the anchor's time and updated with it, gated as
+  // Observe gates; returns whether it was accepted. No start, no restart.
+  bool UpdateWith(Modality m, const GeometricAnchor& anchor);
+  bool started() const { return started_; }
+  // Capture time of the last accepted ranging fix (or the start).
+  double last_ranging_s() const { return last_ranging_s_; }
   Motion motion() const { return motion_; }
   // The IMM's probability of its coordinated-turn mode (1 for kCv and kCa
   // with one mode each: 0); nothing before a start.
@@ -139,8 +158,9 @@ class AnchorFilter {
   using Imm10 = Imm<10>;  // x = [p, v, a, omega]
 
   void PredictTo(double t_s);
-  // A camera ray: held, and an update normal to it when a track runs.
-  void ObserveRay(const GeometricAnchor& a);
+  // A camera ray: held, and an update normal to it when a track runs;
+  // whether the update was accepted.
+  bool ObserveRay(const GeometricAnchor& a);
   // A LiDAR or radar fix as an update of the running track (predicted to
   // its time); returns whether the gate accepted it.
   bool UpdateRanging(Modality m, const GeometricAnchor& a);
@@ -170,6 +190,9 @@ class AnchorFilter {
   Matrix10d p_ = Matrix10d::Identity();
   std::optional<GeometricAnchor> ray_;                         // the latest camera ray
   std::optional<std::pair<Eigen::Vector3d, double>> pending_;  // a radar start to confirm: p, t
+  // Set (AssociationCost, on a copy): Update computes the gated d^2 here
+  // and changes nothing.
+  std::optional<double>* probe_ = nullptr;
 };
 
 }  // namespace uavsim::pipeline

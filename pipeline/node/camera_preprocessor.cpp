@@ -82,6 +82,7 @@ struct Blob {
 struct CameraPreprocessor::Impl {
   sensors::FisheyeStereoConfig camera;
   CameraPreprocessConfig config;
+  int max_observations = 1;
   bool raw = false;
 
   int width_px = 0, height_px = 0;  // rectified
@@ -115,8 +116,13 @@ struct CameraPreprocessor::Impl {
   Eigen::Vector3d BearingW(Eye eye, const Eigen::Vector2d& centre_px) const;
   CameraObservation EmptyObservation(double t_s) const;
   CameraObservation ProcessRaw(const sensors::StereoFrame& frame) const;
-  CameraObservation ProcessRoi(const sensors::StereoFrame& frame);
-  void Detect(CameraObservation& obs);
+  CameraObservation ProcessRoi(const sensors::StereoFrame& frame,
+                               std::vector<CameraObservation>* further);
+  // The selected blob into obs (and the further ones, largest first).
+  void Detect(CameraObservation& obs, std::vector<CameraObservation>* further);
+  // Blob `blob` located in both eyes into obs; false (obs untouched) when
+  // the stereo check fails. Its left centre either way.
+  bool Locate(int blob, CameraObservation& obs, Eigen::Vector2d& centre_left_px);
   std::optional<Eigen::Vector2d> CoverageCentroid(int eye, const cv::Rect& window,
                                                   const cv::Mat& mask, const cv::Mat& core,
                                                   double target_grey) const;
@@ -236,7 +242,8 @@ int CameraPreprocessor::Impl::SelectBlob() const {
   return best_gated >= 0 ? best_gated : best;
 }
 
-CameraObservation CameraPreprocessor::Impl::ProcessRoi(const sensors::StereoFrame& frame) {
+CameraObservation CameraPreprocessor::Impl::ProcessRoi(const sensors::StereoFrame& frame,
+                                                       std::vector<CameraObservation>* further) {
   CameraObservation obs = EmptyObservation(frame.t_capture_s);
 
   cv::remap(View(frame.left), left_rect, map_fixed_xy, map_fixed_frac, cv::INTER_LINEAR,
@@ -254,7 +261,7 @@ CameraObservation CameraPreprocessor::Impl::ProcessRoi(const sensors::StereoFram
     // opening would erase; closing joins its fragments (body, rotors).
     cv::morphologyEx(foreground, foreground, cv::MORPH_CLOSE, closing_kernel);
   }
-  if (frame_index > config.warmup_frames) Detect(obs);
+  if (frame_index > config.warmup_frames) Detect(obs, further);
   UpdateBackgrounds();
   return obs;
 }
@@ -299,10 +306,34 @@ std::optional<Eigen::Vector2d> CameraPreprocessor::Impl::CoverageCentroid(
   return Eigen::Vector2d(window.x + m.m10 / m.m00, window.y + m.m01 / m.m00);
 }
 
-void CameraPreprocessor::Impl::Detect(CameraObservation& obs) {
+void CameraPreprocessor::Impl::Detect(CameraObservation& obs,
+                                      std::vector<CameraObservation>* further) {
   FindBlobs();
   const int blob = SelectBlob();
   if (blob < 0) return;
+  Eigen::Vector2d centre;
+  Locate(blob, obs, centre);
+  // The gate follows the left centre, whether or not the stereo check passed.
+  has_previous = true;
+  previous_centre_px = centre;
+  previous_frame = frame_index;
+  if (!further) return;
+  // The further blobs, largest first (equal areas: the lower label).
+  std::vector<int> order;
+  for (int label = 1; label < static_cast<int>(blobs.size()); ++label)
+    if (label != blob && blobs[label].area_px >= config.min_blob_area_px) order.push_back(label);
+  std::stable_sort(order.begin(), order.end(),
+                   [&](int a, int b) { return blobs[a].area_px > blobs[b].area_px; });
+  for (int label : order) {
+    if (static_cast<int>(further->size()) + 1 >= max_observations) break;
+    CameraObservation other = EmptyObservation(obs.t_s);
+    Eigen::Vector2d unused;
+    if (Locate(label, other, unused)) further->push_back(std::move(other));
+  }
+}
+
+bool CameraPreprocessor::Impl::Locate(int blob, CameraObservation& obs,
+                                      Eigen::Vector2d& centre_left_px) {
   const cv::Rect image_rect(0, 0, width_px, height_px);
   const cv::Rect box = blobs[blob].box;
   const int extent_px = std::max(box.width, box.height);
@@ -324,9 +355,7 @@ void CameraPreprocessor::Impl::Detect(CameraObservation& obs) {
   const double target_grey = grey[grey.size() / 2];
   const Eigen::Vector2d centre_left =
       CoverageCentroid(0, window, mask, core, target_grey).value_or(blobs[blob].centroid_px());
-  has_previous = true;
-  previous_centre_px = centre_left;
-  previous_frame = frame_index;
+  centre_left_px = centre_left;
 
   // The right eye: find the target by correlating the left patch's
   // difference from its background with the right eye's, along the
@@ -338,12 +367,12 @@ void CameraPreprocessor::Impl::Detect(CameraObservation& obs) {
   const int tu = static_cast<int>(std::lround(centre_left.x()));
   const int tv = static_cast<int>(std::lround(centre_left.y()));
   const cv::Rect patch(tu - half, tv - half, 2 * half + 1, 2 * half + 1);
-  if ((patch & image_rect) != patch) return;
+  if ((patch & image_rect) != patch) return false;
   const int slack = config.epipolar_slack_px;
   const cv::Rect search = cv::Rect(patch.x - max_disparity_px, patch.y - slack,
                                    patch.width + max_disparity_px + 1, patch.height + 2 * slack) &
                           image_rect;
-  if (search.width < patch.width || search.height < patch.height) return;
+  if (search.width < patch.width || search.height < patch.height) return false;
   cv::Mat templ, scene;
   left_rect(patch).convertTo(templ, CV_32F);
   templ -= background[0](patch);
@@ -353,14 +382,14 @@ void CameraPreprocessor::Impl::Detect(CameraObservation& obs) {
   double best = 0.0;
   cv::Point at;
   cv::minMaxLoc(ncc, nullptr, &best, nullptr, &at);
-  if (!(best >= config.ncc_min)) return;
+  if (!(best >= config.ncc_min)) return false;
   const cv::Rect right_window = window + (search.tl() + at - patch.tl());
-  if ((right_window & image_rect) != right_window) return;
+  if ((right_window & image_rect) != right_window) return false;
   cv::Mat right_mask;
   cv::dilate(mask, right_mask, cv::Mat());  // the match is whole pixels: one more of rim
   const std::optional<Eigen::Vector2d> centre_right =
       CoverageCentroid(1, right_window, right_mask, core, target_grey);
-  if (!centre_right) return;
+  if (!centre_right) return false;
 
   const double side_px = std::min(std::max(config.min_roi_side_px, config.roi_margin * extent_px),
                                   static_cast<double>(std::max(width_px, height_px)));
@@ -373,6 +402,7 @@ void CameraPreprocessor::Impl::Detect(CameraObservation& obs) {
   Crop(right_rect, centre_right->x(), centre_right->y(), side_px, obs.crop_right);
   obs.bearing_left_w = BearingW(Eye::kLeft, centre_left);
   obs.bearing_right_w = BearingW(Eye::kRight, *centre_right);
+  return true;
 }
 
 CameraPreprocessor::CameraPreprocessor(const sensors::FisheyeStereoConfig& camera,
@@ -382,6 +412,7 @@ CameraPreprocessor::CameraPreprocessor(const sensors::FisheyeStereoConfig& camer
   m.camera = camera;
   m.config = config.camera;
   m.raw = config.CameraRaw();
+  m.max_observations = config.max_observations;
   m.width_px = m.config.rectified_width_px;
   m.height_px = m.config.rectified_height_px;
   // Near the centre Mei's projection maps angle theta to about
@@ -413,10 +444,13 @@ CameraPreprocessor::~CameraPreprocessor() = default;
 CameraPreprocessor::CameraPreprocessor(CameraPreprocessor&&) noexcept = default;
 CameraPreprocessor& CameraPreprocessor::operator=(CameraPreprocessor&&) noexcept = default;
 
-CameraObservation CameraPreprocessor::Process(const sensors::StereoFrame& frame) {
+CameraObservation CameraPreprocessor::Process(const sensors::StereoFrame& frame,
+                                              std::vector<CameraObservation>* further) {
   CheckSize(frame.left, impl_->camera, "left");
   CheckSize(frame.right, impl_->camera, "right");
-  return impl_->raw ? impl_->ProcessRaw(frame) : impl_->ProcessRoi(frame);
+  if (further) further->clear();
+  return impl_->raw ? impl_->ProcessRaw(frame)
+                    : impl_->ProcessRoi(frame, impl_->max_observations > 1 ? further : nullptr);
 }
 
 void CameraPreprocessor::Reset() { impl_->ResetTracking(); }

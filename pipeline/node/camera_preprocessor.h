@@ -58,6 +58,7 @@
 
 #include <Eigen/Geometry>
 #include <memory>
+#include <vector>
 
 #include "pipeline/node/observations.h"
 #include "pipeline/node/preprocess_config.h"
@@ -76,7 +77,12 @@ class CameraPreprocessor {
   CameraPreprocessor(CameraPreprocessor&&) noexcept;
   CameraPreprocessor& operator=(CameraPreprocessor&&) noexcept;
 
-  CameraObservation Process(const sensors::StereoFrame& frame);
+  // The observation; with `further` (cleared first) and max_observations
+  // > 1, up to max_observations - 1 further moving blobs that pass the
+  // stereo check, largest first, each located and cropped as the selected
+  // one is (the gate follows the selected one only).
+  CameraObservation Process(const sensors::StereoFrame& frame,
+                            std::vector<CameraObservation>* further = nullptr);
 
   // Forgets the background model and the last detection.
   void Reset();

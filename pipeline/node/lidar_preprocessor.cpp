@@ -29,6 +29,7 @@ LidarPreprocessor::LidarPreprocessor(const sensors::LidarConfig& sensor,
                                      const PreprocessConfig& config,
                                      const core::WeatherConfig& weather)
     : config_(config.lidar),
+      max_observations_(config.max_observations),
       sensor_(sensor),
       weather_(weather),
       reject_weather_(config.lidar.weather_echo_rejection && !config.LidarRaw() &&
@@ -94,12 +95,28 @@ bool LidarPreprocessor::IsStatic(const sensors::LidarPoint& p) const {
   return false;
 }
 
-PointObservation LidarPreprocessor::Process(const sensors::PointCloudFrame& frame) {
+PointObservation LidarPreprocessor::ObservationOf(const sensors::PointCloudFrame& frame,
+                                                  const std::vector<std::size_t>& kept) const {
   PointObservation obs;
   obs.t_s = frame.t_start_s;
   obs.channels = 4;
   obs.sensor_position_w = sensor_position_w_;
+  const std::vector<std::size_t> pick =
+      EvenlySpacedIndices(kept.size(), PointObservation::kMaxPoints);
+  obs.values.reserve(4 * pick.size());
+  double offset_sum_s = 0.0;
+  for (std::size_t k : pick) {
+    const sensors::LidarPoint& p = frame.points[kept[k]];
+    obs.values.insert(obs.values.end(), {p.x_m, p.y_m, p.z_m, p.intensity});
+    offset_sum_s += p.t_offset_s;
+  }
+  if (!pick.empty()) obs.t_s += offset_sum_s / static_cast<double>(pick.size());
+  return obs;
+}
 
+PointObservation LidarPreprocessor::Process(const sensors::PointCloudFrame& frame,
+                                            std::vector<PointObservation>* further) {
+  if (further) further->clear();
   std::vector<std::size_t> kept;  // indices into frame.points, increasing
   if (raw_) {
     kept.reserve(frame.points.size());
@@ -121,7 +138,7 @@ PointObservation LidarPreprocessor::Process(const sensors::PointCloudFrame& fram
       occupancy_.clear();
       occupancy_.rehash(0);
     }
-    return obs;
+    return ObservationOf(frame, {});
   } else {
     std::vector<std::size_t> dynamic;
     for (std::size_t i = 0; i < frame.points.size(); ++i)
@@ -138,27 +155,30 @@ PointObservation LidarPreprocessor::Process(const sensors::PointCloudFrame& fram
       }
       const DbscanClusters clusters =
           Dbscan(xyz, 3, config_.cluster_eps_m, config_.cluster_min_points);
-      std::vector<char> keep_cluster(clusters.size.size(), 0);
-      for (int id : LargestClusters(clusters, config_.clusters_kept)) keep_cluster[id] = 1;
+      // 1: the kept clusters; 2 + i: the i-th further one.
+      std::vector<int> role(clusters.size.size(), 0);
+      const int extra = further ? max_observations_ - 1 : 0;
+      const std::vector<int> largest = LargestClusters(clusters, config_.clusters_kept + extra);
+      for (std::size_t r = 0; r < largest.size(); ++r)
+        role[largest[r]] = r < static_cast<std::size_t>(config_.clusters_kept)
+                               ? 1
+                               : 2 + static_cast<int>(r) - config_.clusters_kept;
+      std::vector<std::vector<std::size_t>> extra_points(
+          largest.size() -
+          std::min(largest.size(), static_cast<std::size_t>(config_.clusters_kept)));
       for (std::size_t k = 0; k < dynamic.size(); ++k) {
         const int id = clusters.label[k];
-        if (id != DbscanClusters::kNoise && keep_cluster[id]) kept.push_back(dynamic[k]);
+        if (id == DbscanClusters::kNoise || role[id] == 0) continue;
+        if (role[id] == 1)
+          kept.push_back(dynamic[k]);
+        else
+          extra_points[static_cast<std::size_t>(role[id] - 2)].push_back(dynamic[k]);
       }
+      for (const auto& points : extra_points) further->push_back(ObservationOf(frame, points));
     }
     ++frames_seen_;
   }
-
-  const std::vector<std::size_t> pick =
-      EvenlySpacedIndices(kept.size(), PointObservation::kMaxPoints);
-  obs.values.reserve(4 * pick.size());
-  double offset_sum_s = 0.0;
-  for (std::size_t k : pick) {
-    const sensors::LidarPoint& p = frame.points[kept[k]];
-    obs.values.insert(obs.values.end(), {p.x_m, p.y_m, p.z_m, p.intensity});
-    offset_sum_s += p.t_offset_s;
-  }
-  if (!pick.empty()) obs.t_s += offset_sum_s / static_cast<double>(pick.size());
-  return obs;
+  return ObservationOf(frame, kept);
 }
 
 }  // namespace uavsim::pipeline

@@ -10,6 +10,9 @@
 //             static_neighbourhood, one of the 26 around it) is static;
 //             DBSCAN (cluster_eps_m, cluster_min_points) of the dynamic
 //             points, the clusters_kept largest kept (0: every dynamic point).
+//   further   (max_observations N > 1, issue 46) the next N - 1 largest
+//             clusters, each an observation of its own (as the kept one
+//             is made), largest first.
 //   weather   (lidar.weather_echo_rejection, ours) before both: a return is
 //             dropped when fog or rain backscatter at its range could have
 //             produced its power, i.e. when P < fog_echo_margin S_fog(r) or
@@ -41,6 +44,7 @@
 #include <cstdint>
 #include <unordered_map>
 #include <unordered_set>
+#include <vector>
 
 #include "core/weather.h"
 #include "pipeline/node/observations.h"
@@ -55,7 +59,10 @@ class LidarPreprocessor {
   LidarPreprocessor(const sensors::LidarConfig& sensor, const PreprocessConfig& config,
                     const core::WeatherConfig& weather = {});
 
-  PointObservation Process(const sensors::PointCloudFrame& frame);
+  // The observation; with `further` (cleared first) and max_observations
+  // > 1, the further clusters' observations too.
+  PointObservation Process(const sensors::PointCloudFrame& frame,
+                           std::vector<PointObservation>* further = nullptr);
 
   // Forgets the background and the frame count.
   void Reset();
@@ -76,8 +83,12 @@ class LidarPreprocessor {
   void Learn(const sensors::PointCloudFrame& frame);
   // Whether the return could be a fog or rain echo (see above).
   bool IsWeatherEcho(const sensors::LidarPoint& p) const;
+  // The observation of the frame's points `kept` (indices, increasing).
+  PointObservation ObservationOf(const sensors::PointCloudFrame& frame,
+                                 const std::vector<std::size_t>& kept) const;
 
   LidarPreprocessConfig config_;
+  int max_observations_;
   sensors::LidarConfig sensor_;
   core::WeatherConfig weather_;
   bool reject_weather_;

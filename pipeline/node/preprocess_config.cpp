@@ -65,6 +65,7 @@ void Visit(V& v, RadarPreprocessConfig& c) {
 template <class V>
 void Visit(V& v, PreprocessConfig& c) {
   v("raw", c.raw);
+  v("max_observations", c.max_observations, Rule::Range(1, 64));
   v.Object("camera", c.camera);
   v.Object("lidar", c.lidar);
   v.Object("radar", c.radar);

@@ -117,6 +117,15 @@ struct RadarPreprocessConfig {
 
 struct PreprocessConfig {
   bool raw = false;  // every modality raw: the paper's "without preprocessing"
+  // Observations a node sends per frame (issue 46: several targets). 1 (the
+  // paper): the one observation its pre-processing picks. N > 1: that one
+  // and up to N - 1 further ones, each its own observation with its own
+  // geometric anchor and latent: the camera's next largest moving blobs
+  // that pass the stereo check, the LiDAR's next largest clusters, the
+  // radar's next clusters in its selection's order that pass its gate. Raw
+  // pre-processing, and a LiDAR or radar keeping every point
+  // (clusters_kept 0), send one.
+  int max_observations = 1;
   CameraPreprocessConfig camera;
   LidarPreprocessConfig lidar;
   RadarPreprocessConfig radar;

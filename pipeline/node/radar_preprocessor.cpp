@@ -32,6 +32,7 @@ RadarPreprocessor::RadarPreprocessor(const sensors::FmcwRadarConfig& sensor,
                                      const PreprocessConfig& config,
                                      const core::WeatherConfig& weather)
     : config_(config.radar),
+      max_observations_(config.max_observations),
       raw_(config.RadarRaw()),
       reject_rain_(config.radar.rain_doppler_rejection && !config.RadarRaw() &&
                    weather.rain_mm_h > 0.0),
@@ -50,9 +51,8 @@ bool RadarPreprocessor::IsRainEcho(const sensors::RadarPoint& p) const {
 
 std::vector<int> RadarPreprocessor::Choose(const sensors::RadarFrame& frame,
                                            const std::vector<std::size_t>& valid,
-                                           const DbscanClusters& clusters) {
-  if (config_.selection == RadarSelection::kLargest)
-    return LargestClusters(clusters, config_.clusters_kept);
+                                           const DbscanClusters& clusters, int count) {
+  if (config_.selection == RadarSelection::kLargest) return LargestClusters(clusters, count);
   const std::vector<Eigen::Vector3d> centroids = Centroids(frame, valid, clusters);
   std::vector<int> support(centroids.size(), 0);
   for (std::size_t id = 0; id < centroids.size(); ++id)
@@ -75,50 +75,17 @@ std::vector<int> RadarPreprocessor::Choose(const sensors::RadarFrame& frame,
   });
   std::vector<int> out;
   for (int id : order)
-    if (static_cast<int>(out.size()) < config_.clusters_kept && support[id] >= config_.min_support)
+    if (static_cast<int>(out.size()) < count && support[id] >= config_.min_support)
       out.push_back(id);
   return out;
 }
 
-PointObservation RadarPreprocessor::Process(const sensors::RadarFrame& frame) {
+PointObservation RadarPreprocessor::ObservationOf(const sensors::RadarFrame& frame,
+                                                  const std::vector<std::size_t>& kept) const {
   PointObservation obs;
   obs.t_s = frame.t_capture_s;
   obs.channels = 5;
   obs.sensor_position_w = sensor_position_w_;
-
-  std::vector<std::size_t> valid;
-  for (std::size_t i = 0; i < frame.points.size(); ++i) {
-    const sensors::RadarPoint& p = frame.points[i];
-    if (std::isfinite(p.x_m) && std::isfinite(p.y_m) && std::isfinite(p.z_m) &&
-        std::isfinite(p.radial_velocity_mps) && std::isfinite(p.snr_db) &&
-        !(reject_rain_ && IsRainEcho(p)))
-      valid.push_back(i);
-  }
-
-  std::vector<std::size_t> kept;  // indices into frame.points, increasing
-  if (raw_ || config_.clusters_kept == 0) {
-    kept = std::move(valid);
-  } else {
-    const bool with_velocity = config_.velocity_weight_s > 0.0;
-    const int dims = with_velocity ? 4 : 3;
-    std::vector<float> features;
-    features.reserve(dims * valid.size());
-    for (std::size_t i : valid) {
-      const sensors::RadarPoint& p = frame.points[i];
-      features.insert(features.end(), {p.x_m, p.y_m, p.z_m});
-      if (with_velocity)
-        features.push_back(static_cast<float>(config_.velocity_weight_s * p.radial_velocity_mps));
-    }
-    const DbscanClusters clusters =
-        Dbscan(features, dims, config_.cluster_eps_m, config_.cluster_min_points);
-    std::vector<char> keep_cluster(clusters.size.size(), 0);
-    for (int id : Choose(frame, valid, clusters)) keep_cluster[id] = 1;
-    for (std::size_t k = 0; k < valid.size(); ++k) {
-      const int id = clusters.label[k];
-      if (id != DbscanClusters::kNoise && keep_cluster[id]) kept.push_back(valid[k]);
-    }
-  }
-
   const std::vector<std::size_t> pick =
       EvenlySpacedIndices(kept.size(), PointObservation::kMaxPoints);
   obs.values.reserve(5 * pick.size());
@@ -127,6 +94,53 @@ PointObservation RadarPreprocessor::Process(const sensors::RadarFrame& frame) {
     obs.values.insert(obs.values.end(), {p.x_m, p.y_m, p.z_m, p.radial_velocity_mps, p.snr_db});
   }
   return obs;
+}
+
+PointObservation RadarPreprocessor::Process(const sensors::RadarFrame& frame,
+                                            std::vector<PointObservation>* further) {
+  if (further) further->clear();
+  std::vector<std::size_t> valid;
+  for (std::size_t i = 0; i < frame.points.size(); ++i) {
+    const sensors::RadarPoint& p = frame.points[i];
+    if (std::isfinite(p.x_m) && std::isfinite(p.y_m) && std::isfinite(p.z_m) &&
+        std::isfinite(p.radial_velocity_mps) && std::isfinite(p.snr_db) &&
+        !(reject_rain_ && IsRainEcho(p)))
+      valid.push_back(i);
+  }
+  if (raw_ || config_.clusters_kept == 0) return ObservationOf(frame, valid);
+
+  const bool with_velocity = config_.velocity_weight_s > 0.0;
+  const int dims = with_velocity ? 4 : 3;
+  std::vector<float> features;
+  features.reserve(dims * valid.size());
+  for (std::size_t i : valid) {
+    const sensors::RadarPoint& p = frame.points[i];
+    features.insert(features.end(), {p.x_m, p.y_m, p.z_m});
+    if (with_velocity)
+      features.push_back(static_cast<float>(config_.velocity_weight_s * p.radial_velocity_mps));
+  }
+  const DbscanClusters clusters =
+      Dbscan(features, dims, config_.cluster_eps_m, config_.cluster_min_points);
+  const int extra = further ? max_observations_ - 1 : 0;
+  const std::vector<int> chosen = Choose(frame, valid, clusters, config_.clusters_kept + extra);
+  // 1: the kept clusters; 2 + i: the i-th further one.
+  std::vector<int> role(clusters.size.size(), 0);
+  const std::size_t kept_count =
+      std::min(chosen.size(), static_cast<std::size_t>(config_.clusters_kept));
+  for (std::size_t r = 0; r < chosen.size(); ++r)
+    role[chosen[r]] = r < kept_count ? 1 : 2 + static_cast<int>(r - kept_count);
+  std::vector<std::size_t> kept;  // indices into frame.points, increasing
+  std::vector<std::vector<std::size_t>> extra_points(chosen.size() - kept_count);
+  for (std::size_t k = 0; k < valid.size(); ++k) {
+    const int id = clusters.label[k];
+    if (id == DbscanClusters::kNoise || role[id] == 0) continue;
+    if (role[id] == 1)
+      kept.push_back(valid[k]);
+    else
+      extra_points[static_cast<std::size_t>(role[id] - 2)].push_back(valid[k]);
+  }
+  for (const auto& points : extra_points) further->push_back(ObservationOf(frame, points));
+  return ObservationOf(frame, kept);
 }
 
 }  // namespace uavsim::pipeline

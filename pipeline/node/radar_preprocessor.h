@@ -16,6 +16,9 @@
 //                 multipath and noise detections scatter. Ties: the larger,
 //                 then the first found. A cluster with less than min_support
 //                 is not kept (nothing is sent when none qualifies).
+//   further    (max_observations N > 1, issue 46) the next N - 1 clusters
+//              in the selection's order that pass its gate (persistent:
+//              min_support), each an observation of its own.
 //   rain       (radar.rain_doppler_rejection, ours; before clustering, in
 //              rain only) a detection at direction u from the radar (unit,
 //              world) whose radial velocity v lies in [-9.65 u_z - m,
@@ -54,7 +57,10 @@ class RadarPreprocessor {
   RadarPreprocessor(const sensors::FmcwRadarConfig& sensor, const PreprocessConfig& config,
                     const core::WeatherConfig& weather = {});
 
-  PointObservation Process(const sensors::RadarFrame& frame);
+  // The observation; with `further` (cleared first) and max_observations
+  // > 1, the further clusters' observations too.
+  PointObservation Process(const sensors::RadarFrame& frame,
+                           std::vector<PointObservation>* further = nullptr);
 
   // Forgets the previous frames' clusters.
   void Reset() { history_.clear(); }
@@ -65,14 +71,19 @@ class RadarPreprocessor {
     std::vector<Eigen::Vector3d> centroids;
   };
 
-  // The ids of the clusters to keep, given the valid detections' clusters.
+  // The ids of at most `count` clusters to keep, in the selection's order,
+  // given the valid detections' clusters.
   std::vector<int> Choose(const sensors::RadarFrame& frame, const std::vector<std::size_t>& valid,
-                          const DbscanClusters& clusters);
+                          const DbscanClusters& clusters, int count);
+  // The observation of the frame's points `kept` (indices, increasing).
+  PointObservation ObservationOf(const sensors::RadarFrame& frame,
+                                 const std::vector<std::size_t>& kept) const;
 
   // Whether a detection moves as falling rain seen from the radar does.
   bool IsRainEcho(const sensors::RadarPoint& p) const;
 
   RadarPreprocessConfig config_;
+  int max_observations_;
   bool raw_;
   bool reject_rain_;
   Eigen::Vector3d sensor_position_w_;

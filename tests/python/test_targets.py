@@ -1,5 +1,7 @@
-"""Several UAVs: roles, truth per target and GOSPA (issue 46, its first part)."""
+"""Several UAVs: roles, truth per target, GOSPA, and the `mtt` tracker's
+labelled tracks scored as sets (issue 46)."""
 import copy
+import itertools
 import json
 
 import numpy as np
@@ -44,7 +46,9 @@ def multi_target_scores(run, truth, method, c):
     estimate against both targets per window, and each target's RMSE where
     the estimate was assigned to it, recomputed from truth.csv and
     estimates.csv: {"rms_m", "ospa_rms_m", "per_target": {id: (rmse, n)}}."""
-    est = {round(t, 6): np.array([x, y, z]) for t, x, y, z in run.estimates[method].tolist()}
+    e = run.estimates[method]
+    assert set(e["track"].tolist()) <= {0}  # one estimate per window: track 0
+    est = {round(float(r["t_s"]), 6): np.array([r["x_m"], r["y_m"], r["z_m"]]) for r in e}
     gospa2 = ospa2 = 0.0
     errors = {}
     n = run.metrics["windows"]
@@ -98,3 +102,76 @@ def test_a_distractor_first_makes_the_second_uav_the_target():
     assert "target" not in a.truth.dtype.names
     b = uavsim.run(two_uavs(["target", "distractor"]), duration=SECONDS, quiet=True, methods=["ekf"])
     assert np.allclose(a.truth["z_m"] - b.truth["z_m"], 15.0)
+
+
+def set_gospa(truths, estimates, c):
+    """GOSPA (p = 2, alpha = 2) by brute force over every assignment of
+    truths to estimates or to nothing: (gospa^2, {truth index: estimate
+    index})."""
+    best, best_map = None, None
+    options = list(range(len(estimates))) + [None] * len(truths)
+    for chosen in itertools.permutations(options, len(truths)):
+        used = [j for j in chosen if j is not None]
+        if len(used) != len(set(used)):
+            continue
+        total, mapping = 0.0, {}
+        for i, j in enumerate(chosen):
+            d = np.linalg.norm(truths[i] - estimates[j]) if j is not None else None
+            if d is not None and d < c:
+                total += d * d
+                mapping[i] = j
+            else:
+                total += c * c / 2  # missed (a pair at c or beyond is no better)
+        total += c * c / 2 * (len(estimates) - len(mapping))  # false
+        if best is None or total < best - 1e-12:
+            best, best_map = total, mapping
+    return best, best_map
+
+
+def test_mtt_tracks_both_targets_and_is_scored_as_a_set():
+    doc = two_uavs(["target", "target"])
+    doc["pipeline"]["methods"] = ["mtt", "uavloc_per_track", "ekf"]
+    doc["pipeline"]["preprocess"]["max_observations"] = 4
+    seconds = 8
+    run = uavsim.run(doc, duration=seconds, quiet=True)
+    truth = uavsim.run(doc, duration=seconds + 1, quiet=True, methods=["ekf"]).truth
+    mtt = run.estimates["mtt"]
+    assert "track" in mtt.dtype.names and (mtt["track"] >= 1).all()
+    g = run.metrics["gospa"]["methods"]["mtt"]
+    c, n = 10.0, run.metrics["windows"]
+    gospa2, switches, fragments = 0.0, 0, 0
+    last = [None, None]
+    assigned_before = [False, False]
+    for k in range(1, n + 1):
+        t = round(0.2 * k, 6)
+        rows = truth[np.abs(truth["t_s"] - t) < 1e-9]
+        targets = [np.array([r["x_m"], r["y_m"], r["z_m"]]) for r in rows]
+        here = mtt[np.abs(mtt["t_s"] - t) < 1e-9]
+        assert len(set(here["track"].tolist())) == len(here)  # a label once per window
+        estimates = [np.array([r["x_m"], r["y_m"], r["z_m"]]) for r in here]
+        g2, mapping = set_gospa(targets, estimates, c)
+        gospa2 += g2
+        for i in range(2):
+            if i in mapping:
+                label = int(here["track"][mapping[i]])
+                switches += last[i] is not None and last[i] != label
+                fragments += last[i] is not None and not assigned_before[i]
+                last[i] = label
+            assigned_before[i] = i in mapping
+    assert g["rms_m"] == pytest.approx(np.sqrt(gospa2 / n), abs=1e-5)
+    assert g["identity_switches"] == switches
+    assert g["fragmentations"] == fragments
+    # Both targets found: each assigned in the run's second half.
+    for target in ("target", "second"):
+        assert g["per_target"][target]["windows"] >= n // 2
+        assert g["per_target"][target]["rmse_m"] < 1.0
+    assert run.rmse["mtt"] is not None
+    # uavloc_per_track runs mtt's tracker: its labels in a window are among
+    # mtt's (a confirmed track whose network has no estimate yet is left out).
+    per_track = run.estimates["uavloc_per_track"]
+    assert len(per_track) > 0 and (per_track["track"] >= 1).all()
+    for t in set(per_track["t_s"].tolist()):
+        ours = set(per_track["track"][np.abs(per_track["t_s"] - t) < 1e-9].tolist())
+        assert ours <= set(mtt["track"][np.abs(mtt["t_s"] - t) < 1e-9].tolist())
+    assert "method=uavloc_per_track" in run.metrics["uavloc_model"]["extensions"]
+    assert "max_observations=4" in run.metrics["uavloc_model"]["extensions"]

@@ -49,7 +49,9 @@ class Run:
     metrics    metrics.json as a dict (rmse_m, rmse_common_m, packets, data rates, ...)
     rmse       {method: RMSE in metres or None}, as `uavsim run` prints them
     truth      truth.csv: t_s, x_m, y_m, z_m, vx_mps, vy_mps, vz_mps
-    estimates  {method: t_s, x_m, y_m, z_m} from estimates.csv
+    estimates  {method: t_s, x_m, y_m, z_m} from estimates.csv (and track, with
+               several targets or a multi-target method: a track's label, 0
+               for a method's single estimate)
     packets    packets.csv: every uplink message (t_capture_s, node, modality, ...)
     rate_snr   {beam: (snr_db, rate_bps_hz)} from rate_snr.csv, as a structured array each
     dir        the run directory (None when the run was not kept)
@@ -63,9 +65,11 @@ class Run:
             self.manifest = json.load(f)
         self.rmse = dict(self.metrics["rmse_m"])
         self.truth = read_csv(os.path.join(folder, "truth.csv"))
-        self.estimates = by_method(read_csv(os.path.join(folder, "estimates.csv")))
+        estimates = read_csv(os.path.join(folder, "estimates.csv"))
+        self.estimates = by_method(estimates)
+        columns = [n for n in estimates.dtype.names if n != "method"]
         for m in self.rmse:
-            self.estimates.setdefault(m, np.zeros(0, dtype=[(n, "f8") for n in ("t_s", "x_m", "y_m", "z_m")]))
+            self.estimates.setdefault(m, np.zeros(0, dtype=[(n, "f8") for n in columns]))
         self.packets = read_csv(os.path.join(folder, "packets.csv"))
         self.rate_snr = by_method(read_csv(os.path.join(folder, "rate_snr.csv")), column="beam")
 

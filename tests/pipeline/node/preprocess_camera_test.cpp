@@ -203,27 +203,24 @@ class SyntheticSequence {
     return X_WC_[eye].inverse() * p_W;
   }
 
-  sensors::StereoFrame Frame(int frame) const {
+  // A second, smaller point, moving the other way 0.2-1 m from the first
+  // (Frame's `second`).
+  Eigen::Vector3d SecondW(int frame) const {
+    const double s = static_cast<double>(frame) / (kFrames - 1);
+    const Eigen::Vector3d p_C(0.8 - 0.6 * s, 0.45, 3.5 - 0.3 * s);
+    return X_WC_[0] * p_C;
+  }
+
+  sensors::StereoFrame Frame(int frame, bool second = false) const {
     core::RngStream noise(7, "preprocess_camera_test/frame" + std::to_string(frame));
     sensors::StereoFrame out;
     out.t_capture_s = frame / 30.0;
     sensors::GrayImage* eyes[2] = {&out.left, &out.right};
     for (int eye = 0; eye < 2; ++eye) {
       sensors::GrayImage image = background_[eye];
-      const Eigen::Vector2d c = OmnidirProject(camera_, InEye(eye, TargetW(frame)));
-      // A disc of kDiscRadiusPx, its edge pixels shaded by 4 x 4 coverage.
-      for (int v = std::max(0, static_cast<int>(c.y()) - 5);
-           v <= std::min(image.height - 1, static_cast<int>(c.y()) + 5); ++v)
-        for (int u = std::max(0, static_cast<int>(c.x()) - 5);
-             u <= std::min(image.width - 1, static_cast<int>(c.x()) + 5); ++u) {
-          int inside = 0;
-          for (int j = 0; j < 4; ++j)
-            for (int i = 0; i < 4; ++i)
-              inside += (Eigen::Vector2d(u - 0.375 + 0.25 * i, v - 0.375 + 0.25 * j) - c).norm() <
-                        kDiscRadiusPx;
-          auto& px = image.pixels[static_cast<std::size_t>(v) * image.width + u];
-          px = static_cast<std::uint8_t>(std::lround((px * (16 - inside) + 20.0 * inside) / 16.0));
-        }
+      DrawDisc(image, OmnidirProject(camera_, InEye(eye, TargetW(frame))), kDiscRadiusPx);
+      if (second)
+        DrawDisc(image, OmnidirProject(camera_, InEye(eye, SecondW(frame))), kSecondRadiusPx);
       for (auto& px : image.pixels)
         px = static_cast<std::uint8_t>(
             std::clamp(std::lround(px + noise.Normal(0.0, 2.0)), 0L, 255L));
@@ -232,7 +229,24 @@ class SyntheticSequence {
     return out;
   }
 
+  // A dark disc of radius_px at c, its edge pixels shaded by 4 x 4 coverage.
+  static void DrawDisc(sensors::GrayImage& image, const Eigen::Vector2d& c, double radius_px) {
+    for (int v = std::max(0, static_cast<int>(c.y()) - 5);
+         v <= std::min(image.height - 1, static_cast<int>(c.y()) + 5); ++v)
+      for (int u = std::max(0, static_cast<int>(c.x()) - 5);
+           u <= std::min(image.width - 1, static_cast<int>(c.x()) + 5); ++u) {
+        int inside = 0;
+        for (int j = 0; j < 4; ++j)
+          for (int i = 0; i < 4; ++i)
+            inside += (Eigen::Vector2d(u - 0.375 + 0.25 * i, v - 0.375 + 0.25 * j) - c).norm() <
+                      radius_px;
+        auto& px = image.pixels[static_cast<std::size_t>(v) * image.width + u];
+        px = static_cast<std::uint8_t>(std::lround((px * (16 - inside) + 20.0 * inside) / 16.0));
+      }
+  }
+
   static constexpr double kDiscRadiusPx = 3.0;
+  static constexpr double kSecondRadiusPx = 2.0;
 
  private:
   sensors::FisheyeStereoConfig camera_;
@@ -302,6 +316,52 @@ TEST_CASE("CameraPreprocessor: ROI follows a moving target and its bearings tria
     CHECK(error_m < expected_m);
   }
   CHECK(detected == SyntheticSequence::kFrames - config.camera.warmup_frames);
+}
+
+TEST_CASE("CameraPreprocessor: max_observations sends the further blob, located in both eyes",
+          "[pipeline]") {
+  const SyntheticSequence& seq = Sequence();
+  PreprocessConfig one;
+  PreprocessConfig several = one;
+  several.max_observations = 3;
+  CameraPreprocessor pre_one(seq.camera(), one), pre(seq.camera(), several);
+  int found = 0;
+  for (int k = 0; k < SyntheticSequence::kFrames; ++k) {
+    std::vector<CameraObservation> further, none;
+    const CameraObservation obs = pre.Process(seq.Frame(k, true), &further);
+    // The picked observation is what max_observations 1 gives.
+    const CameraObservation alone = pre_one.Process(seq.Frame(k, true), &none);
+    CHECK(none.empty());
+    CHECK(obs.detected == alone.detected);
+    CHECK(obs.centre_left_px == alone.centre_left_px);
+    CHECK(obs.crop_left == alone.crop_left);
+    if (k < several.camera.warmup_frames) {
+      CHECK(further.empty());
+      continue;
+    }
+    INFO("frame " << k);
+    REQUIRE(obs.detected);
+    CHECK((obs.centre_left_px.cast<double>() - PinholeProject(pre, seq.InEye(0, seq.TargetW(k))))
+              .norm() < 2.0);
+    REQUIRE(further.size() <= 2);
+    if (further.empty()) continue;
+    ++found;
+    const CameraObservation& o = further.front();
+    CHECK(o.detected);
+    CHECK(o.t_s == obs.t_s);
+    const Eigen::Vector3d p_W = seq.SecondW(k);
+    CHECK((o.centre_left_px.cast<double>() - PinholeProject(pre, seq.InEye(0, p_W))).norm() < 2.0);
+    CHECK((o.centre_right_px.cast<double>() - PinholeProject(pre, seq.InEye(1, p_W))).norm() < 2.0);
+    CHECK(o.crop_left.size() == static_cast<std::size_t>(128 * 128));
+    const Eigen::Vector3d tri =
+        Triangulate(o.eye_left_w, o.bearing_left_w, o.eye_right_w, o.bearing_right_w);
+    // As the first test's bound, for centres good to 0.5 px (a smaller disc).
+    const double f = pre.rectified_focal_px(), b = seq.camera().baseline_m;
+    const double Z = seq.InEye(0, p_W).z(), dd = 1.0;
+    CHECK((tri - p_W).norm() < std::hypot(Z * Z * dd / (f * b), Z * dd / f));
+  }
+  // The second point is found in most frames after the warm-up.
+  CHECK(found >= (SyntheticSequence::kFrames - several.camera.warmup_frames) * 3 / 4);
 }
 
 TEST_CASE("CameraPreprocessor: deterministic, whatever OpenCV's thread count", "[pipeline]") {

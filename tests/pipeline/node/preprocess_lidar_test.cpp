@@ -112,6 +112,33 @@ TEST_CASE("LidarPreprocessor: the static scene vanishes, a moving box is kept wh
     REQUIRE(obs.count() == 216);
     for (std::size_t i = 0; i < obs.count(); ++i) CHECK(InsideBox(&obs.values[4 * i], uav, 0.5));
   }
+  SECTION("max_observations: the further clusters, largest first, each its own") {
+    PreprocessConfig several = config;
+    several.max_observations = 3;
+    LidarPreprocessor pre3(Sensor(), several);
+    for (int k = 0; k < warmup; ++k) pre3.Process(Scan(k, {}));
+    const Eigen::Vector3d uav(15.0, 2.0, 6.0), uav2(5.0, 12.0, 7.0), bird(25.0, -6.0, 9.0);
+    std::vector<PointObservation> further;
+    // Boxes of 216, 24 and 96 points (six faces of n x n).
+    const PointObservation obs = pre3.Process(
+        Scan(warmup, {Box(bird, 0.2, 2), Box(uav, 0.5, 6), Box(uav2, 0.4, 4)}), &further);
+    REQUIRE(obs.count() == 216);
+    REQUIRE(further.size() == 2);
+    REQUIRE(further[0].count() == 96);
+    REQUIRE(further[1].count() == 24);
+    for (std::size_t i = 0; i < 96; ++i) CHECK(InsideBox(&further[0].values[4 * i], uav2, 0.4));
+    for (std::size_t i = 0; i < 24; ++i) CHECK(InsideBox(&further[1].values[4 * i], bird, 0.2));
+    CHECK(further[0].sensor_position_w == obs.sensor_position_w);
+    // max_observations 2 keeps the larger further one; 1 (the default) none.
+    several.max_observations = 2;
+    LidarPreprocessor pre2(Sensor(), several);
+    for (int k = 0; k < warmup; ++k) pre2.Process(Scan(k, {}));
+    pre2.Process(Scan(warmup, {Box(bird, 0.2, 2), Box(uav, 0.5, 6), Box(uav2, 0.4, 4)}), &further);
+    REQUIRE(further.size() == 1);
+    CHECK(further[0].count() == 96);
+    pre.Process(Scan(warmup, {Box(bird, 0.2, 2), Box(uav, 0.5, 6)}), &further);
+    CHECK(further.empty());
+  }
   SECTION("clusters_kept 0 keeps every dynamic point") {
     PreprocessConfig all = config;
     all.lidar.clusters_kept = 0;

@@ -76,6 +76,30 @@ TEST_CASE("RadarPreprocessor: of clusters of 30 and 5 points, the 30 are kept", 
   }
 }
 
+TEST_CASE("RadarPreprocessor: max_observations sends the further clusters, each its own",
+          "[pipeline]") {
+  core::RngStream rng(3, "preprocess_radar_test/further");
+  const Eigen::Vector3d uav(20.0, 10.0, 30.0), uav2(-5.0, 30.0, 35.0), bird(12.0, 18.0, 25.0);
+  const auto frame =
+      Frame({Cluster(bird, 5, 2.0, rng), Cluster(uav, 30, -4.0, rng), Cluster(uav2, 12, 3.0, rng)});
+  PreprocessConfig config = Largest();
+  config.max_observations = 3;
+  std::vector<PointObservation> further;
+  const PointObservation obs = RadarPreprocessor(Sensor(), config).Process(frame, &further);
+  REQUIRE(obs.count() == 30);
+  REQUIRE(further.size() == 2);
+  REQUIRE(further[0].count() == 12);
+  REQUIRE(further[1].count() == 5);
+  for (std::size_t i = 0; i < 12; ++i) CHECK(further[0].values[5 * i + 3] == 3.0f);
+  for (std::size_t i = 0; i < 5; ++i) CHECK(Near(&further[1].values[5 * i], bird, 2.0));
+  CHECK(further[1].t_s == 1.25);
+  // Without `further`, or at the default, the same observation and none further.
+  const PointObservation alone = RadarPreprocessor(Sensor(), config).Process(frame);
+  CHECK(alone.values == obs.values);
+  RadarPreprocessor(Sensor(), Largest()).Process(frame, &further);
+  CHECK(further.empty());
+}
+
 TEST_CASE("RadarPreprocessor: velocity separates co-located clusters when weighted", "[pipeline]") {
   core::RngStream rng(3, "preprocess_radar_test/velocity");
   const Eigen::Vector3d here(20.0, 10.0, 30.0);
