@@ -6,8 +6,8 @@
 #include "pipeline/baselines/ekf.h"
 #include "pipeline/edge/edge_localizer.h"
 #include "pipeline/edge/scripted_edge.h"
-#include "pipeline/multitarget/gnn_tracker.h"
 #include "pipeline/multitarget/per_track_uavloc.h"
+#include "pipeline/multitarget/target_tracker.h"
 #include "pipeline/pipeline_config.h"
 
 namespace uavsim::pipeline {
@@ -44,9 +44,10 @@ class AnchorTrackLocalization final : public LocalizationMethod {
 
 class MttLocalization final : public LocalizationMethod {
  public:
-  explicit MttLocalization(double window_s)
-      : LocalizationMethod("mtt", {false, false, false, /*detections=*/true}, true),
-        tracker_(window_s) {}
+  MttLocalization(double window_s, TargetTracker::Association association)
+      : LocalizationMethod(association == TargetTracker::Association::kJpda ? "mtt_jpda" : "mtt",
+                           {false, false, false, /*detections=*/true}, true),
+        tracker_(window_s, association) {}
 
  private:
   std::optional<Eigen::Vector3d> DoEstimate(const WindowArrivals& w) override {
@@ -55,7 +56,7 @@ class MttLocalization final : public LocalizationMethod {
     return tracks_.front().position_m;  // the oldest confirmed track
   }
   std::optional<std::vector<TrackEstimate>> DoTracks() const override { return tracks_; }
-  GnnTracker tracker_;
+  TargetTracker tracker_;
   std::vector<TrackEstimate> tracks_;
 };
 
@@ -128,8 +129,9 @@ std::unique_ptr<LocalizationMethod> MakeAnchorTrackMethod(double window_s) {
   return std::make_unique<AnchorTrackLocalization>(window_s);
 }
 
-std::unique_ptr<LocalizationMethod> MakeMttMethod(double window_s) {
-  return std::make_unique<MttLocalization>(window_s);
+std::unique_ptr<LocalizationMethod> MakeMttMethod(double window_s, bool jpda) {
+  return std::make_unique<MttLocalization>(
+      window_s, jpda ? TargetTracker::Association::kJpda : TargetTracker::Association::kGnn);
 }
 
 std::unique_ptr<LocalizationMethod> MakePerTrackMethod(

@@ -110,9 +110,10 @@ class LocalizationMethod {
 std::unique_ptr<LocalizationMethod> MakeEkfMethod(std::unique_ptr<Ekf> ekf);
 // `anchor_track`: the anchored head's filter alone on each window's anchors.
 std::unique_ptr<LocalizationMethod> MakeAnchorTrackMethod(double window_s);
-// `mtt`: the multi-target tracker (pipeline/multitarget/gnn_tracker.h) on
-// every detection; its Estimate is its oldest confirmed track.
-std::unique_ptr<LocalizationMethod> MakeMttMethod(double window_s);
+// `mtt` (`mtt_jpda` with jpda): the multi-target tracker
+// (pipeline/multitarget/target_tracker.h) on every detection, associating
+// by GNN (JPDA); its Estimate is its oldest confirmed track.
+std::unique_ptr<LocalizationMethod> MakeMttMethod(double window_s, bool jpda = false);
 // `uavloc_per_track`: the paper's edge network per track of mtt's tracker
 // (pipeline/multitarget/per_track_uavloc.h); `make_edge` loads a network.
 std::unique_ptr<LocalizationMethod> MakePerTrackMethod(

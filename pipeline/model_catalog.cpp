@@ -398,7 +398,9 @@ bool SendsAnchors(const PipelineConfig& p) {
   const auto& m = p.methods;
   return std::find(m.begin(), m.end(), "uavloc_anchored") != m.end() ||
          std::find(m.begin(), m.end(), "anchor_track") != m.end() ||
-         std::find(m.begin(), m.end(), "mtt") != m.end();
+         std::find(m.begin(), m.end(), "mtt") != m.end() ||
+         std::find(m.begin(), m.end(), "mtt_jpda") != m.end() ||
+         std::find(m.begin(), m.end(), "uavloc_per_track") != m.end();
 }
 
 }  // namespace uavsim::pipeline

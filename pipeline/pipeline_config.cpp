@@ -13,14 +13,14 @@ using core::Rule;
 
 const std::vector<std::string>& KnownMethods() {
   static const std::vector<std::string> names{
-      "uavloc",          "uavloc_anchored", "anchor_track", "ekf",
-      "uavloc_camera",   "uavloc_lidar",    "uavloc_radar", "mtt",
-      "uavloc_per_track"};
+      "uavloc",       "uavloc_anchored", "anchor_track", "ekf",      "uavloc_camera",
+      "uavloc_lidar", "uavloc_radar",    "mtt",          "mtt_jpda", "uavloc_per_track"};
   return names;
 }
 
 bool RunsMultiTarget(const PipelineConfig& p) {
   return std::find(p.methods.begin(), p.methods.end(), "mtt") != p.methods.end() ||
+         std::find(p.methods.begin(), p.methods.end(), "mtt_jpda") != p.methods.end() ||
          std::find(p.methods.begin(), p.methods.end(), "uavloc_per_track") != p.methods.end();
 }
 
@@ -37,7 +37,8 @@ std::string ModalitySubsetName(int bits) {
 }
 
 std::optional<MethodName> ParseMethod(const std::string& name) {
-  for (const char* fixed : {"anchor_track", "ekf", "uavloc_anchored", "mtt", "uavloc_per_track"})
+  for (const char* fixed :
+       {"anchor_track", "ekf", "uavloc_anchored", "mtt", "mtt_jpda", "uavloc_per_track"})
     if (name == fixed) return MethodName{"", kModalitySubsets};
   for (int m = 0; m < kModalityCount; ++m)
     if (name == "uavloc_" + ModalitySubsetName(1 << m)) return MethodName{"uavloc", 1 << m};

@@ -126,7 +126,9 @@ struct RunData {
   std::optional<Table> gospa, rate_snr_targets;  // several targets, or mtt
   std::vector<TargetPath> targets;               // several targets: each one's path
   std::vector<std::string> methods;              // in order of first appearance
-  std::map<std::string, std::vector<Estimate>> estimated;
+  // Each method's estimate per window (a tracker's: its oldest track), and
+  // a tracker's every track (estimates.csv's track column above 0).
+  std::map<std::string, std::vector<Estimate>> estimated, tracked;
   std::vector<double> truth_t;
   std::vector<Eigen::Vector3d> truth_p;
   double window_s = 0.2, duration_s = 0.0;
@@ -202,9 +204,17 @@ RunData Load(const std::string& dir) {
     for (std::size_t i = 0; i < e.rows.size(); ++i) {
       const std::string& method = e.rows[i][static_cast<std::size_t>(m)];
       if (!d.estimated.count(method)) d.methods.push_back(method);
-      d.estimated[method].push_back(
-          {e.Number(i, t), Eigen::Vector3d(e.Number(i, x), e.Number(i, y), e.Number(i, z)),
-           track < 0 ? 0 : static_cast<long>(e.Number(i, track))});
+      const Estimate est{e.Number(i, t),
+                         Eigen::Vector3d(e.Number(i, x), e.Number(i, y), e.Number(i, z)),
+                         track < 0 ? 0 : static_cast<long>(e.Number(i, track))};
+      std::vector<Estimate>& one = d.estimated[method];
+      if (est.track > 0) d.tracked[method].push_back(est);
+      // A tracker's estimate is its oldest track (the lowest label) of the window.
+      if (est.track > 0 && !one.empty() && one.back().t_s == est.t_s) {
+        if (est.track < one.back().track) one.back() = est;
+        continue;
+      }
+      one.push_back(est);
     }
   }
   // Methods that ran but never estimated still get a row in the tables.
@@ -630,12 +640,8 @@ std::string TargetColour(std::size_t k) {
 // The methods that report labelled tracks (a track column above 0).
 std::vector<std::string> Trackers(const RunData& d) {
   std::vector<std::string> out;
-  for (const std::string& m : d.methods) {
-    const auto it = d.estimated.find(m);
-    if (it != d.estimated.end() && std::any_of(it->second.begin(), it->second.end(),
-                                               [](const Estimate& e) { return e.track > 0; }))
-      out.push_back(m);
-  }
+  for (const std::string& m : d.methods)
+    if (d.tracked.count(m)) out.push_back(m);
   return out;
 }
 
@@ -660,8 +666,7 @@ void PlotTargetsAndTracks(GnuplotFigure& figure, const RunData& d) {
       At(d.metrics, "/gospa/c_m").is_number() ? At(d.metrics, "/gospa/c_m").get<double>() : 10.0;
   std::vector<std::string> points(d.targets.size() + 1);
   for (const std::string& method : Trackers(d))
-    for (const Estimate& e : d.estimated.at(method)) {
-      if (e.track <= 0) continue;
+    for (const Estimate& e : d.tracked.at(method)) {
       const long k = NearestTarget(d, e.t_s, e.p, c_m);
       points[k < 0 ? d.targets.size() : static_cast<std::size_t>(k)] +=
           ShortestNumber(e.p.x()) + " " + ShortestNumber(e.p.y()) + "\n";

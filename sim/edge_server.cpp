@@ -25,7 +25,7 @@ bool Runs(const Scenario& s, const std::string& method) {
 std::vector<std::string> MethodOrder(const Scenario& s) {
   std::vector<std::string> order;
   for (const char* fixed :
-       {"uavloc", "uavloc_anchored", "anchor_track", "ekf", "mtt", "uavloc_per_track"})
+       {"uavloc", "uavloc_anchored", "anchor_track", "ekf", "mtt", "mtt_jpda", "uavloc_per_track"})
     if (Runs(s, fixed)) order.push_back(fixed);
   std::set<std::string> learned, scripted, hosted;
   for (const std::string& method : s.pipeline.methods) {
@@ -52,8 +52,8 @@ std::vector<std::unique_ptr<pipeline::LocalizationMethod>> MakeMethods(
       methods.push_back(pipeline::MakeEkfMethod(MakeEkf(s)));
     else if (name == "anchor_track")
       methods.push_back(pipeline::MakeAnchorTrackMethod(s.pipeline.window_s));
-    else if (name == "mtt")
-      methods.push_back(pipeline::MakeMttMethod(s.pipeline.window_s));
+    else if (name == "mtt" || name == "mtt_jpda")
+      methods.push_back(pipeline::MakeMttMethod(s.pipeline.window_s, name == "mtt_jpda"));
     else if (auto method = catalog.MakeMethod(name))
       methods.push_back(std::move(method));
   }

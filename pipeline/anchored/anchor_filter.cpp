@@ -375,6 +375,85 @@ bool AnchorFilter::UpdateWith(Modality m, const GeometricAnchor& a) {
   return accepted;
 }
 
+AnchorFilter::PositionFix AnchorFilter::PositionFixOf(Modality m, const GeometricAnchor& a) {
+  if (m == Modality::kCamera || a.kind != GeometricAnchor::Kind::kPoint)
+    throw std::invalid_argument("AnchorFilter::PositionFixOf: a LiDAR or radar point, not a ray");
+  if (m == Modality::kLidar)
+    return {a.origin_w, kLidarSigma_m * kLidarSigma_m * Eigen::Matrix3d::Identity(), a.t_s};
+  const RadarFix fix = RadarFixOf(a);
+  return {fix.position, fix.noise, a.t_s};
+}
+
+std::optional<double> AnchorFilter::PositionLogLikelihood(const PositionFix& fix) const {
+  if (!started_) return std::nullopt;
+  AnchorFilter copy = *this;
+  copy.PredictTo(fix.t_s);
+  const Eigen::Vector3d nu = fix.position_m - copy.x_.head<3>();
+  const Eigen::LLT<Eigen::Matrix3d> llt(copy.p_.topLeftCorner<3, 3>() + fix.noise);
+  if (llt.info() != Eigen::Success) return std::nullopt;
+  const double d2 = nu.dot(llt.solve(nu));
+  if (d2 > kGate[3]) return std::nullopt;
+  const Eigen::Matrix3d l = llt.matrixL();
+  return -0.5 * d2 - l.diagonal().array().log().sum() - 1.5 * std::log(2.0 * kPi);
+}
+
+bool AnchorFilter::UpdateWithMixture(const std::vector<PositionFix>& fixes,
+                                     const std::vector<double>& beta, double p_d,
+                                     double clutter_per_m3) {
+  if (!started_ || fixes.empty() || fixes.size() != beta.size()) return false;
+  double t_ref = fixes.front().t_s, beta_sum = 0.0;
+  for (std::size_t j = 0; j < fixes.size(); ++j) t_ref = std::max(t_ref, fixes[j].t_s);
+  for (double b : beta) beta_sum += b;
+  if (!(beta_sum > 0.0)) return false;
+  PredictTo(t_ref);
+  const double beta0 = std::max(0.0, 1.0 - beta_sum);
+  std::vector<Imm10::Mode> updated = imm_.modes();
+  std::vector<double> log_likelihood(updated.size());
+  for (std::size_t mode = 0; mode < updated.size(); ++mode) {
+    const Imm10::Mode prior = updated[mode];
+    const Eigen::Vector3d v = prior.x.segment<3>(3);
+    std::vector<Imm10::Mode> hypotheses;
+    double likelihood = (1.0 - p_d) * clutter_per_m3;  // (1 - p_d) lambda + p_d sum_j g_j
+    for (std::size_t j = 0; j < fixes.size(); ++j) {
+      // The fix moved to t_ref along the predicted velocity.
+      const Eigen::Vector3d z = fixes[j].position_m + v * (t_ref - fixes[j].t_s);
+      const Eigen::Vector3d nu = z - prior.x.head<3>();
+      const Eigen::Matrix3d s3 = prior.P.topLeftCorner<3, 3>() + fixes[j].noise;
+      const Eigen::LLT<Eigen::Matrix3d> llt(s3);
+      if (llt.info() != Eigen::Success) return false;
+      const Eigen::Matrix<double, 10, 3> k = llt.solve(prior.P.topRows<3>()).transpose();
+      Imm10::Mode h = prior;
+      h.x += k * nu;
+      Matrix10d a = Matrix10d::Identity();
+      a.leftCols<3>() -= k;
+      h.P = a * prior.P * a.transpose() + k * fixes[j].noise * k.transpose();
+      hypotheses.push_back(h);
+      const Eigen::Matrix3d l = llt.matrixL();
+      likelihood += p_d * std::exp(-0.5 * nu.dot(llt.solve(nu)) - l.diagonal().array().log().sum() -
+                                   1.5 * std::log(2.0 * kPi));
+    }
+    // The moment-matched mixture of the prediction and the fixes' updates.
+    Imm10::Mode mixed;
+    mixed.x = beta0 * prior.x;
+    for (std::size_t j = 0; j < fixes.size(); ++j) mixed.x += beta[j] * hypotheses[j].x;
+    mixed.x /= beta0 + beta_sum;
+    const Vector10d d0 = prior.x - mixed.x;
+    mixed.P = beta0 * (prior.P + d0 * d0.transpose());
+    for (std::size_t j = 0; j < fixes.size(); ++j) {
+      const Vector10d dj = hypotheses[j].x - mixed.x;
+      mixed.P += beta[j] * (hypotheses[j].P + dj * dj.transpose());
+    }
+    mixed.P /= beta0 + beta_sum;
+    updated[mode] = mixed;
+    log_likelihood[mode] = likelihood > 0.0 ? std::log(likelihood) : -INFINITY;
+  }
+  imm_.modes() = std::move(updated);
+  imm_.UpdateProbabilities(log_likelihood);
+  Combine();
+  if (beta_sum >= 0.5) last_ranging_s_ = t_s_;
+  return true;
+}
+
 std::optional<AnchorFilter::Estimate> AnchorFilter::PredictAt(double t_s) const {
   if (!started_ || t_s - last_ranging_s_ > kMaxPredict_s) return std::nullopt;
   AnchorFilter copy = *this;

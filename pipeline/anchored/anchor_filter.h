@@ -94,7 +94,7 @@ class AnchorFilter {
   std::optional<Estimate> PredictAt(double t_s) const;
   void Reset() { *this = AnchorFilter(motion_); }
 
-  // A multi-target tracker's use (pipeline/multitarget/gnn_tracker.h),
+  // A multi-target tracker's use (pipeline/multitarget/target_tracker.h),
   // which associates the fixes itself: no ray gate, no restarts.
   // Starts (or restarts) the track at a LiDAR or radar fix, as Observe
   // starts one (radar: at its own fix, with its radial velocity). Throws
@@ -108,6 +108,31 @@ class AnchorFilter {
   // The track predicted to the anchor's time and updated with it, gated as
   // Observe gates; returns whether it was accepted. No start, no restart.
   bool UpdateWith(Modality m, const GeometricAnchor& anchor);
+  // A LiDAR or radar fix as a position and its noise: the LiDAR centroid
+  // with sigma_lidar^2 I, the radar's (range along its line of sight, the
+  // radar's noise above).
+  struct PositionFix {
+    Eigen::Vector3d position_m = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d noise = Eigen::Matrix3d::Identity();
+    double t_s = 0.0;
+  };
+  // Throws std::invalid_argument for a ray.
+  static PositionFix PositionFixOf(Modality m, const GeometricAnchor& anchor);
+  // log N(z - p; 0, S) of the fix against the track predicted to its time
+  // (S = P_pp + R), nothing outside the 99 % gate (3 degrees of freedom) or
+  // before a start.
+  std::optional<double> PositionLogLikelihood(const PositionFix& fix) const;
+  // The probabilistic data association update (Bar-Shalom & Tse 1975;
+  // Bar-Shalom, Li & Kirubarajan 2001, Sec. 6.7 of the PDAF): fixes[j] is the
+  // target's with probability beta[j], none with beta_0 = 1 - sum beta. The
+  // track is predicted to the latest fix's time (each fix moved there along
+  // the predicted velocity) and each mode becomes the moment-matched mixture
+  // of its prediction (weight beta_0) and its update by each fix (beta_j);
+  // its IMM likelihood is (1 - p_d) clutter + p_d sum_j N(nu_j; 0, S_j)
+  // (clutter: the false fixes' spatial density, per m^3). Returns whether
+  // anything was updated (a start and some beta_j > 0).
+  bool UpdateWithMixture(const std::vector<PositionFix>& fixes, const std::vector<double>& beta,
+                         double p_d, double clutter_per_m3);
   bool started() const { return started_; }
   // Capture time of the last accepted ranging fix (or the start).
   double last_ranging_s() const { return last_ranging_s_; }

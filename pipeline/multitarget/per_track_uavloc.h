@@ -1,6 +1,6 @@
 // `uavloc_per_track` (our extension of the paper, issue 46; listed in
 // metrics.json's uavloc_model.extensions): the paper's pipeline run once per
-// track of the multi-target tracker (gnn_tracker.h, the one `mtt` runs).
+// track of the multi-target tracker (target_tracker.h, the one `mtt` runs).
 // Each live track has an edge network of its own (TE-Align, MADW, MICA,
 // Mamba and the paper's head, with its own temporal state), fed each
 // window the latents of the detections the tracker associated with that
@@ -23,7 +23,7 @@
 
 #include "pipeline/edge/edge_localizer.h"
 #include "pipeline/multitarget/detection.h"
-#include "pipeline/multitarget/gnn_tracker.h"
+#include "pipeline/multitarget/target_tracker.h"
 
 namespace uavsim::pipeline {
 
@@ -33,14 +33,14 @@ class PerTrackUavLoc {
   // Throws std::invalid_argument for window_s not finite and > 0.
   PerTrackUavLoc(double window_s, EdgeFactory make_edge);
 
-  // As GnnTracker::OnWindow, with each confirmed track's position the one
+  // As TargetTracker::OnWindow, with each confirmed track's position the one
   // its network regressed (confirmed tracks without one left out).
   std::vector<TrackEstimate> OnWindow(std::int64_t k, const std::vector<Detection>& detections);
 
  private:
   std::unique_ptr<EdgeLocalizer> TakeEdge();
 
-  GnnTracker tracker_;
+  TargetTracker tracker_;
   EdgeFactory make_edge_;
   std::map<std::uint32_t, std::unique_ptr<EdgeLocalizer>> edges_;  // per live track
   std::vector<std::unique_ptr<EdgeLocalizer>> spare_;              // of deleted tracks, reset

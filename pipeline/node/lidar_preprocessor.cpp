@@ -155,26 +155,12 @@ PointObservation LidarPreprocessor::Process(const sensors::PointCloudFrame& fram
       }
       const DbscanClusters clusters =
           Dbscan(xyz, 3, config_.cluster_eps_m, config_.cluster_min_points);
-      // 1: the kept clusters; 2 + i: the i-th further one.
-      std::vector<int> role(clusters.size.size(), 0);
       const int extra = further ? max_observations_ - 1 : 0;
-      const std::vector<int> largest = LargestClusters(clusters, config_.clusters_kept + extra);
-      for (std::size_t r = 0; r < largest.size(); ++r)
-        role[largest[r]] = r < static_cast<std::size_t>(config_.clusters_kept)
-                               ? 1
-                               : 2 + static_cast<int>(r) - config_.clusters_kept;
-      std::vector<std::vector<std::size_t>> extra_points(
-          largest.size() -
-          std::min(largest.size(), static_cast<std::size_t>(config_.clusters_kept)));
-      for (std::size_t k = 0; k < dynamic.size(); ++k) {
-        const int id = clusters.label[k];
-        if (id == DbscanClusters::kNoise || role[id] == 0) continue;
-        if (role[id] == 1)
-          kept.push_back(dynamic[k]);
-        else
-          extra_points[static_cast<std::size_t>(role[id] - 2)].push_back(dynamic[k]);
-      }
-      for (const auto& points : extra_points) further->push_back(ObservationOf(frame, points));
+      ChosenPoints points =
+          PointsOfClusters(clusters, LargestClusters(clusters, config_.clusters_kept + extra),
+                           static_cast<std::size_t>(config_.clusters_kept), dynamic);
+      kept = std::move(points.kept);
+      for (const auto& group : points.further) further->push_back(ObservationOf(frame, group));
     }
     ++frames_seen_;
   }

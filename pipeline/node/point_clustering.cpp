@@ -117,4 +117,22 @@ std::vector<std::size_t> EvenlySpacedIndices(std::size_t count, std::size_t max_
   return idx;
 }
 
+ChosenPoints PointsOfClusters(const DbscanClusters& clusters, const std::vector<int>& chosen,
+                              std::size_t kept, const std::vector<std::size_t>& index_of) {
+  // 1: a kept cluster; 2 + i: the i-th further one.
+  std::vector<std::size_t> role(clusters.size.size(), 0);
+  kept = std::min(kept, chosen.size());
+  for (std::size_t r = 0; r < chosen.size(); ++r)
+    role[static_cast<std::size_t>(chosen[r])] = r < kept ? 1 : 2 + (r - kept);
+  ChosenPoints out;
+  out.further.resize(chosen.size() - kept);
+  for (std::size_t k = 0; k < index_of.size(); ++k) {
+    const int id = clusters.label[k];
+    if (id == DbscanClusters::kNoise || role[static_cast<std::size_t>(id)] == 0) continue;
+    const std::size_t r = role[static_cast<std::size_t>(id)];
+    (r == 1 ? out.kept : out.further[r - 2]).push_back(index_of[k]);
+  }
+  return out;
+}
+
 }  // namespace uavsim::pipeline

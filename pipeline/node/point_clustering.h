@@ -34,6 +34,16 @@ DbscanClusters Dbscan(const std::vector<float>& coordinates, int dims, double ep
 // lower id. Fewer if there are fewer clusters.
 std::vector<int> LargestClusters(const DbscanClusters& clusters, int k);
 
+// The points of the clusters `chosen` (ids, in order): those of the first
+// `kept` together, and each further cluster's apart, as index_of[k] for the
+// clustered point k (increasing within each group).
+struct ChosenPoints {
+  std::vector<std::size_t> kept;
+  std::vector<std::vector<std::size_t>> further;
+};
+ChosenPoints PointsOfClusters(const DbscanClusters& clusters, const std::vector<int>& chosen,
+                              std::size_t kept, const std::vector<std::size_t>& index_of);
+
 // `max_count` indices of [0, count) spread evenly (floor(i * count /
 // max_count)), increasing; all of them if count <= max_count.
 std::vector<std::size_t> EvenlySpacedIndices(std::size_t count, std::size_t max_count);

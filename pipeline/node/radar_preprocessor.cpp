@@ -123,24 +123,10 @@ PointObservation RadarPreprocessor::Process(const sensors::RadarFrame& frame,
       Dbscan(features, dims, config_.cluster_eps_m, config_.cluster_min_points);
   const int extra = further ? max_observations_ - 1 : 0;
   const std::vector<int> chosen = Choose(frame, valid, clusters, config_.clusters_kept + extra);
-  // 1: the kept clusters; 2 + i: the i-th further one.
-  std::vector<int> role(clusters.size.size(), 0);
-  const std::size_t kept_count =
-      std::min(chosen.size(), static_cast<std::size_t>(config_.clusters_kept));
-  for (std::size_t r = 0; r < chosen.size(); ++r)
-    role[chosen[r]] = r < kept_count ? 1 : 2 + static_cast<int>(r - kept_count);
-  std::vector<std::size_t> kept;  // indices into frame.points, increasing
-  std::vector<std::vector<std::size_t>> extra_points(chosen.size() - kept_count);
-  for (std::size_t k = 0; k < valid.size(); ++k) {
-    const int id = clusters.label[k];
-    if (id == DbscanClusters::kNoise || role[id] == 0) continue;
-    if (role[id] == 1)
-      kept.push_back(valid[k]);
-    else
-      extra_points[static_cast<std::size_t>(role[id] - 2)].push_back(valid[k]);
-  }
-  for (const auto& points : extra_points) further->push_back(ObservationOf(frame, points));
-  return ObservationOf(frame, kept);
+  const ChosenPoints points =
+      PointsOfClusters(clusters, chosen, static_cast<std::size_t>(config_.clusters_kept), valid);
+  for (const auto& group : points.further) further->push_back(ObservationOf(frame, group));
+  return ObservationOf(frame, points.kept);
 }
 
 }  // namespace uavsim::pipeline

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <filesystem>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -142,4 +143,41 @@ TEST_CASE("Trace: a trace of other sensing, another version or cut short is refu
   r = Run(dir + "/ok", {"--replay", traces});
   INFO(r.err);
   CHECK(r.exit_code == 0);
+}
+
+TEST_CASE("Trace: a node's further observations are replayed as sent", "[sim][slow]") {
+  // Several targets, max_observations 4 and mtt: the messages carry lists
+  // of observations (sensing_trace.h's version 2); the replay sends them all.
+  const std::string dir = TempDir("trace-further");
+  const std::string traces = dir + "/traces";
+  const std::string swarm = std::string(UAVSIM_SOURCE_DIR) + "/scenarios/swarm.json";
+  const std::vector<std::string> settings = {"--set", R"(/pipeline/methods=["mtt", "ekf"])",
+                                             "--set", "/pipeline/preprocess/max_observations=4"};
+  const auto run = [&](const std::string& out, const std::vector<std::string>& extra) {
+    std::vector<std::string> args = {"run", swarm, "--out", out, "--quiet", "--duration", "3"};
+    args.insert(args.end(), settings.begin(), settings.end());
+    args.insert(args.end(), extra.begin(), extra.end());
+    return RunCli(args);
+  };
+  const auto t = run(dir + "/traced", {"--trace", traces});
+  INFO(t.err);
+  REQUIRE(t.exit_code == 0);
+  const auto r = run(dir + "/replayed", {"--replay", traces});
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  CheckSameRun(dir + "/traced", dir + "/replayed");
+  // And the messages did carry further observations: one observation is
+  // at most 16 + 4 x 16 + 24 bytes (header, latent, a camera's anchor).
+  std::istringstream packets(ReadFile(dir + "/traced/packets.csv"));
+  std::string line;
+  std::getline(packets, line);
+  CHECK(line.rfind("t_capture_s,node,modality,sequence,bytes,", 0) == 0);
+  long most = 0;
+  while (std::getline(packets, line)) {
+    std::istringstream cells(line);
+    std::string cell;
+    for (int c = 0; c < 5; ++c) std::getline(cells, cell, ',');
+    most = std::max(most, std::stol(cell));
+  }
+  CHECK(most > 16 + 4 * 16 + 24);
 }

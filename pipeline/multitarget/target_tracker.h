@@ -35,6 +35,16 @@
 //             velocities differ by less than kMergeSpeed_mps (two tracks on
 //             one target; targets that cross differ in velocity) the
 //             tentative one, else the younger.
+// JPDA (Association::kJpda, method `mtt_jpda`; Fortmann, Bar-Shalom &
+// Scheffe, "Sonar tracking of multiple targets using joint probabilistic
+// data association", IEEE J. Oceanic Engineering 8(3), 1983): a LiDAR or
+// radar scan's fixes (as positions: the radar's radial velocity unused) are
+// shared among the tracks by their joint association probabilities over
+// every feasible event of each cluster of tracks that gate a common fix,
+// and each track takes the PDA update of all the fixes it gates
+// (AnchorFilter::UpdateWithMixture); a track counts a hit when its fixes'
+// probabilities sum to 1/2 or more. Rays, births, confirmation and deletion
+// as above.
 // It reports the confirmed tracks predicted to the window's end, labelled
 // by birth order. Deterministic: no randomness; ties in birth order.
 #pragma once
@@ -51,10 +61,13 @@
 
 namespace uavsim::pipeline {
 
-class GnnTracker {
+class TargetTracker {
  public:
+  // How LiDAR and radar detections are associated (a camera's rays: GNN
+  // either way).
+  enum class Association { kGnn, kJpda };
   // Throws std::invalid_argument for window_s not finite and > 0.
-  explicit GnnTracker(double window_s);
+  explicit TargetTracker(double window_s, Association association = Association::kGnn);
 
   // Window k (ending at k * window_s) and every detection stamped in it
   // (any order). Windows must increase; skipped ones count as empty.
@@ -74,6 +87,12 @@ class GnnTracker {
   static constexpr int kConfirmN = 5;
   static constexpr int kTentativeWindows = 2 * kConfirmN;
   static constexpr double kMaxCoast_s = AnchorFilter::kMaxCoast_s;
+  // JPDA: the probability that a sensor's scan holds a track's target,
+  // the false fixes' spatial density, and the events a cluster may have
+  // before it falls back to GNN (chosen a priori, not tuned).
+  static constexpr double kDetectionProbability = 0.9;
+  static constexpr double kClutterPerM3 = 1e-3;
+  static constexpr std::size_t kJpdaMaxEvents = 100000;
   static constexpr double kMerge_m = 1.0;
   static constexpr double kMergeSpeed_mps = 1.0;
 
@@ -91,6 +110,12 @@ class GnnTracker {
   // `first`: the window's detections (for the indices assigned() keeps).
   void ApplyScan(const std::vector<const Detection*>& scan, const Detection* first);
   void Birth(const Detection& d, std::size_t index);
+  // JPDA's scan: the joint association probabilities, then a PDA update
+  // of every track (AnchorFilter::UpdateWithMixture).
+  void ApplyScanJpda(const std::vector<const Detection*>& scan, const Detection* first);
+  // beta[i][j] from each track's gated log-likelihoods of each detection.
+  std::vector<std::vector<double>> JointProbabilities(
+      const std::vector<std::vector<std::optional<double>>>& log_g) const;
   // Confirms and deletes after window k.
   void Manage(std::int64_t k, double t_end_s);
   // The track's position at t_s (nothing once it no longer predicts).
@@ -99,6 +124,7 @@ class GnnTracker {
   bool SameTarget(const Track& a, const Track& b, double t_s) const;
 
   double window_s_;
+  Association association_;
   std::optional<std::int64_t> last_window_;
   std::vector<Track> tracks_;  // in birth order
   std::uint32_t next_label_ = 1;

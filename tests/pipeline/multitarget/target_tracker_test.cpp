@@ -1,10 +1,10 @@
-// `mtt`'s tracker (pipeline/multitarget/gnn_tracker.h) on synthetic
+// `mtt`'s and `mtt_jpda`'s tracker (pipeline/multitarget/target_tracker.h) on synthetic
 // detections: a LiDAR at 10 Hz and a radar at 10 Hz (each a scan of every
 // target, with Gaussian noise), a camera's rays at 30 Hz. Two targets that
 // cross keep their labels; a target that appears mid-run gets a new track
 // within M-of-N windows and the other's label is untouched; one-off clutter
 // confirms no track; a lost target's track is deleted after the coast.
-#include "pipeline/multitarget/gnn_tracker.h"
+#include "pipeline/multitarget/target_tracker.h"
 
 #include <catch2/catch.hpp>
 #include <cmath>
@@ -107,8 +107,9 @@ struct Followed {
   std::vector<std::size_t> confirmed;  // tracks per window
 };
 Followed Run(const std::vector<Path>& paths, double t_end, Sensors& s,
+             TargetTracker::Association association,
              const std::function<void(std::int64_t, std::vector<Detection>&)>& extra = {}) {
-  GnnTracker tracker(kWindow);
+  TargetTracker tracker(kWindow, association);
   Followed f;
   for (std::int64_t k = 1; k * kWindow <= t_end + 1e-9; ++k) {
     std::vector<Detection> d = WindowDetections(k, paths, s);
@@ -134,11 +135,17 @@ Followed Run(const std::vector<Path>& paths, double t_end, Sensors& s,
   return f;
 }
 
+// Every case runs both associations: GNN (`mtt`) and JPDA (`mtt_jpda`).
+#define BOTH_ASSOCIATIONS \
+  GENERATE(TargetTracker::Association::kGnn, TargetTracker::Association::kJpda)
+
 TEST_CASE("mtt: two crossing targets keep their labels", "[mtt]") {
   Sensors s;
-  const Followed f = Run({AlongX, AlongY}, 10.0, s);
+  const auto association = BOTH_ASSOCIATIONS;
+  INFO("JPDA " << (association == TargetTracker::Association::kJpda));
+  const Followed f = Run({AlongX, AlongY}, 10.0, s, association);
   // Confirmed within M-of-N windows (3 of 5), then followed throughout.
-  for (std::size_t w = GnnTracker::kConfirmN; w < f.labels.size(); ++w) {
+  for (std::size_t w = TargetTracker::kConfirmN; w < f.labels.size(); ++w) {
     INFO("window " << w + 1);
     CHECK(f.confirmed[w] == 2);
     REQUIRE(f.labels[w][0] != 0);
@@ -157,15 +164,18 @@ TEST_CASE("mtt: a target appearing mid-run gets a track of its own", "[mtt]") {
     if (t < 4.0) return std::nullopt;
     return Eigen::Vector3d(10.0, 10.0 - 3.0 * (t - 4.0), 25.0);
   };
-  const Followed f = Run({AlongX, late}, 8.0, s);
+  const auto association = BOTH_ASSOCIATIONS;
+  INFO("JPDA " << (association == TargetTracker::Association::kJpda));
+  const Followed f = Run({AlongX, late}, 8.0, s, association);
   const auto window_of = [](double t) {
     return static_cast<std::size_t>(std::lround(t / kWindow)) - 1;
   };
-  for (std::size_t w = GnnTracker::kConfirmN; w < window_of(4.0); ++w) CHECK(f.confirmed[w] == 1);
+  for (std::size_t w = TargetTracker::kConfirmN; w < window_of(4.0); ++w)
+    CHECK(f.confirmed[w] == 1);
   const std::uint32_t first = f.labels[window_of(3.8)][0];
   REQUIRE(first != 0);
   // Confirmed within N windows of its first detection.
-  const std::size_t by = window_of(4.0) + GnnTracker::kConfirmN;
+  const std::size_t by = window_of(4.0) + TargetTracker::kConfirmN;
   for (std::size_t w = by; w < f.labels.size(); ++w) {
     INFO("window " << w + 1);
     CHECK(f.confirmed[w] == 2);
@@ -185,29 +195,76 @@ TEST_CASE("mtt: one-off clutter confirms no track; a lost target's track is dele
     return AlongX(t);
   };
   // Four LiDAR points a window scattered over 100 m x 100 m x 50 m.
-  const Followed f = Run({gone}, 8.0, s, [&](std::int64_t k, std::vector<Detection>& d) {
-    for (int i = 0; i < 4; ++i) {
-      const double t = static_cast<double>(k - 1) * kWindow + 0.05 * i;
-      d.push_back(s.Lidar(
-          Eigen::Vector3d(where(clutter_rng), where(clutter_rng), 25.0 + 0.5 * where(clutter_rng)),
-          t));
-      d.back().node = 3;
-    }
-  });
+  const auto association = BOTH_ASSOCIATIONS;
+  INFO("JPDA " << (association == TargetTracker::Association::kJpda));
+  const Followed f =
+      Run({gone}, 8.0, s, association, [&](std::int64_t k, std::vector<Detection>& d) {
+        for (int i = 0; i < 4; ++i) {
+          const double t = static_cast<double>(k - 1) * kWindow + 0.05 * i;
+          d.push_back(s.Lidar(Eigen::Vector3d(where(clutter_rng), where(clutter_rng),
+                                              25.0 + 0.5 * where(clutter_rng)),
+                              t));
+          d.back().node = 3;
+        }
+      });
   const auto window_of = [](double t) {
     return static_cast<std::size_t>(std::lround(t / kWindow)) - 1;
   };
-  for (std::size_t w = GnnTracker::kConfirmN; w < window_of(3.0); ++w) CHECK(f.confirmed[w] == 1);
+  for (std::size_t w = TargetTracker::kConfirmN; w < window_of(3.0); ++w)
+    CHECK(f.confirmed[w] == 1);
   // Gone at 3 s: deleted kMaxCoast_s later; clutter confirms nothing.
-  for (std::size_t w = window_of(3.0 + GnnTracker::kMaxCoast_s) + 1; w < f.confirmed.size(); ++w)
+  for (std::size_t w = window_of(3.0 + TargetTracker::kMaxCoast_s) + 1; w < f.confirmed.size(); ++w)
     CHECK(f.confirmed[w] == 0);
 }
 
 TEST_CASE("mtt: windows must increase", "[mtt]") {
-  GnnTracker tracker(kWindow);
+  TargetTracker tracker(kWindow);
   tracker.OnWindow(3, {});
   CHECK_THROWS_AS(tracker.OnWindow(3, {}), std::invalid_argument);
-  CHECK_THROWS_AS(GnnTracker(0.0), std::invalid_argument);
+  CHECK_THROWS_AS(TargetTracker(0.0), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace uavsim::pipeline
+
+namespace uavsim::pipeline {
+namespace {
+
+TEST_CASE("AnchorFilter::UpdateWithMixture: one fix of probability 1 is the Kalman update",
+          "[mtt]") {
+  // The PDA update with beta = {1} moves a CV track as a plain Kalman
+  // update with the position fix does: x + K (z - p), K = P H^T S^-1.
+  AnchorFilter a(AnchorFilter::Motion::kCv), b(AnchorFilter::Motion::kCv);
+  GeometricAnchor start;
+  start.kind = GeometricAnchor::Kind::kPoint;
+  start.origin_w = {1.0, 2.0, 30.0};
+  start.sensor_w = {40.0, -30.0, 1.0};
+  start.range_m = (start.origin_w - start.sensor_w).norm();
+  start.t_s = 1.0;
+  a.StartAt(core::Modality::kLidar, start);
+  b.StartAt(core::Modality::kLidar, start);
+  GeometricAnchor next = start;
+  next.origin_w = {1.3, 2.1, 30.0};
+  next.t_s = 1.1;
+  REQUIRE(a.UpdateWith(core::Modality::kLidar, next));
+  const auto fix = AnchorFilter::PositionFixOf(core::Modality::kLidar, next);
+  REQUIRE(b.UpdateWithMixture({fix}, {1.0}, 0.9, 1e-3));
+  const auto ea = a.PredictAt(1.1), eb = b.PredictAt(1.1);
+  REQUIRE(ea);
+  REQUIRE(eb);
+  CHECK((ea->position_m - eb->position_m).norm() < 1e-9);
+  CHECK((ea->velocity_mps - eb->velocity_mps).norm() < 1e-9);
+  // beta = 1/2: halfway between the prediction and the update (positions).
+  AnchorFilter c(AnchorFilter::Motion::kCv);
+  c.StartAt(core::Modality::kLidar, start);
+  const Eigen::Vector3d predicted = c.PredictAt(1.1)->position_m;
+  REQUIRE(c.UpdateWithMixture({fix}, {0.5}, 0.9, 1e-3));
+  CHECK((c.PredictAt(1.1)->position_m - 0.5 * (predicted + ea->position_m)).norm() < 1e-9);
+  // Outside the gate: no likelihood.
+  auto far = fix;
+  far.position_m.x() += 50.0;
+  CHECK_FALSE(c.PositionLogLikelihood(far));
+  CHECK(c.PositionLogLikelihood(fix));
 }
 
 }  // namespace
