@@ -26,7 +26,7 @@ void TrainingCollector::OnFrame(const SensingNode& node, double t_s, NodeContent
 }
 
 void TrainingCollector::OnArrival(const NodeContent& content, double t_arrival_s, bool on_time) {
-  if (!content.FoundSomething()) return;
+  if (!content.Found()) return;  // the picked observation is the sample
   pipeline::Sample& sample = episode_.samples[content.sample];
   if (on_time) sample.on_time = true;
   sample.fate = on_time ? pipeline::SampleFate::kOnTime : pipeline::SampleFate::kLate;
@@ -34,7 +34,7 @@ void TrainingCollector::OnArrival(const NodeContent& content, double t_arrival_s
 }
 
 void TrainingCollector::OnLost(const NodeContent& content) {
-  if (!content.FoundSomething()) return;
+  if (!content.Found()) return;  // the picked observation is the sample
   episode_.samples[content.sample].fate = pipeline::SampleFate::kLost;
 }
 
