@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include "apps/bench/bench_beam.h"
+#include "apps/bench/bench_camera.h"
 #include "apps/bench/bench_events.h"
 #include "apps/bench/bench_flops.h"
 #include "apps/bench/bench_link.h"
@@ -20,10 +21,14 @@ namespace {
 using core::UsageError;
 
 const char* kHelp =
-    "usage: uavsim bench [raycast|radar|events|link|beam|pipeline|noise|flops|all] [--quiet]\n"
+    "usage: uavsim bench [raycast|camera|radar|events|link|beam|pipeline|noise|flops|all] "
+    "[--quiet]\n"
     "\n"
     "  raycast    Embree rtcIntersect1 throughput vs each sensor's rays per second in the\n"
     "             default city; the camera's packet speed-up; camera + LiDAR real-time factor\n"
+    "  camera     the camera node per stereo frame, one thread: capture (cached, its noise,\n"
+    "             uncached) and pre-processing with its steps (remap, MOG2, closing,\n"
+    "             labelling, running means)\n"
     "  radar      FMCW radar frame: scatterers (with the static cache and without), IF-cube\n"
     "             synthesis, processing (one thread)\n"
     "  events     the event core: hold model (pop earliest, schedule one at a random delay)\n"
@@ -46,6 +51,7 @@ int Bench(const ParsedArgs& a, int, char**) {
   const bool quiet = a.Has("--quiet");
   const std::vector<std::pair<std::string, std::function<int()>>> targets{
       {"raycast", [&] { return sim::BenchRaycast(quiet, std::cout); }},
+      {"camera", [&] { return sim::BenchCamera(quiet, std::cout); }},
       {"radar", [&] { return sim::BenchRadar(quiet, std::cout); }},
       {"events", [&] { return sim::BenchEvents(quiet, std::cout); }},
       {"link", [&] { return sim::BenchLink(quiet, std::cout); }},
@@ -63,8 +69,9 @@ int Bench(const ParsedArgs& a, int, char**) {
     rc = std::max(rc, run());
   }
   if (!found)
-    throw UsageError("uavsim bench: unknown target '" + what +
-                     "' (raycast, radar, events, link, beam, pipeline, noise, flops or all)");
+    throw UsageError(
+        "uavsim bench: unknown target '" + what +
+        "' (raycast, camera, radar, events, link, beam, pipeline, noise, flops or all)");
   return rc;
 }
 
@@ -74,7 +81,7 @@ std::string Help() { return kHelp; }
 
 Command BenchCommand() {
   return {"bench",
-          "bench [raycast|radar|events|link|beam|pipeline|noise|flops|all]",
+          "bench [raycast|camera|radar|events|link|beam|pipeline|noise|flops|all]",
           "measure the hot paths",
           {},
           Help,
