@@ -119,6 +119,36 @@ class Arms {
   }
   std::size_t count() const { return reports_.size(); }
 
+  // Every training stage against its budget (the model's resolved training
+  // config): a row of trainings.csv each. A stage reached its validation
+  // plateau when `patience` epochs had passed without a better validation
+  // loss when it stopped (by its patience or at the cap).
+  struct StageBudget {
+    std::string id, stage;
+    int epochs = 0, best_epoch = 0, max_epochs = 0, patience = 0;
+    bool plateau() const { return epochs - best_epoch >= patience; }
+  };
+  std::vector<StageBudget> Budgets() const {
+    std::vector<StageBudget> out;
+    for (const auto& [id, r] : reports_) {
+      const Json manifest =
+          core::LoadJsonFile((fs::path(dir_) / "models" / id / "model.json").string());
+      const Json& t = manifest.at("training");
+      for (const Json& st : r.value("stages", Json::array())) {
+        StageBudget b;
+        b.id = id;
+        b.stage = st.value("name", "");
+        const bool stage1 = b.stage == "camera" || b.stage == "lidar" || b.stage == "radar";
+        b.epochs = st.value("epochs", 0);
+        b.best_epoch = st.value("best_epoch", 0);
+        b.max_epochs = t.value(stage1 ? "stage1_max_epochs" : "stage2_max_epochs", 0);
+        b.patience = t.value(stage1 ? "stage1_patience" : "stage2_patience", 0);
+        out.push_back(b);
+      }
+    }
+    return out;
+  }
+
  private:
   static std::string Id(const std::string& variant, int z, int s, bool frame) {
     return variant + "-z" + std::to_string(z) + "-s" + std::to_string(s) + (frame ? "-frame" : "");
@@ -759,6 +789,38 @@ double InvocationsWallS(const std::string& dir, std::size_t* invocations) {
 
 // The scenario, the protocol and the trainings; returns the protocol's
 // block (WriteVerdicts ends it with the verdicts' rules).
+// trainings.csv (every stage's epochs, best epoch, cap and patience) and a
+// sentence saying how many stages reached their validation plateau within
+// the plan's one budget (issue 41: a training stopped by its cap has not
+// learnt what its data allow).
+void BudgetRecord(Writer& w, const ReproducePlan& plan, const Arms& arms) {
+  std::ostringstream csv;
+  csv << "model,stage,epochs,best_epoch,max_epochs,patience,plateau\n";
+  std::size_t reached = 0, stage1 = 0, stage1_reached = 0;
+  const std::vector<Arms::StageBudget> budgets = arms.Budgets();
+  for (const Arms::StageBudget& b : budgets) {
+    csv << b.id << "," << b.stage << "," << b.epochs << "," << b.best_epoch << "," << b.max_epochs
+        << "," << b.patience << "," << (b.plateau() ? "yes" : "no") << "\n";
+    const bool is_stage1 = b.stage == "camera" || b.stage == "lidar" || b.stage == "radar";
+    reached += b.plateau();
+    stage1 += is_stage1;
+    stage1_reached += is_stage1 && b.plateau();
+  }
+  w.Csv("trainings.csv", csv.str());
+  const pipeline::TrainingConfig& t = plan.training;
+  w.doc.Text("Budget, one for the paper's design and every baseline: stage 1 at most " +
+             std::to_string(t.stage1_max_epochs) + " epochs (patience " +
+             std::to_string(t.stage1_patience) + ") of at most " +
+             std::to_string(t.stage1_max_samples_per_epoch) + " observations, stage 2 at most " +
+             std::to_string(t.stage2_max_epochs) + " epochs (patience " +
+             std::to_string(t.stage2_patience) + "). " + std::to_string(reached) + " of " +
+             std::to_string(budgets.size()) +
+             " training stages reached their validation plateau (patience epochs without a "
+             "better validation loss when they stopped; stage 1: " +
+             std::to_string(stage1_reached) + " of " + std::to_string(stage1) +
+             "); the others stopped at the cap before their patience ran out (trainings.csv).");
+}
+
 std::size_t Introduction(Writer& w, const ReproduceReportInputs& in, const Arms& arms) {
   const ReproducePlan& plan = *in.plan;
   Document& doc = w.doc;
@@ -788,6 +850,7 @@ std::size_t Introduction(Writer& w, const ReproduceReportInputs& in, const Arms&
            std::to_string(invocations) +
            " invocation(s), each in invocations.csv (episodes simulated by an interrupted "
            "invocation are not counted there).");
+  BudgetRecord(w, plan, arms);
   return protocol_at;
 }
 

@@ -5,6 +5,7 @@
 // report.
 #include <signal.h>
 
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <chrono>
 #include <cmath>
@@ -26,6 +27,7 @@
 #include "test_support.h"
 
 namespace fs = std::filesystem;
+using uavsim::core::Json;
 using uavsim::sim::CompareSeeds;
 using uavsim::sim::MakeReproducePlan;
 using uavsim::sim::ReproduceOptions;
@@ -322,6 +324,46 @@ TEST_CASE(
        {"Fig. 7", "Fig. 8", "Fig. 9", "Table II", "Table III", "Fig. 10a", "Fig. 10b", "Table IV",
         "Fig. 11a", "Fig. 11b", "Fig. 12", "Fig. 13", "Fig. 14", "Fig. 15"})
     CHECK(artefact_names.count(a) == 1);
+  // Every training stage against the plan's budget, recounted from the
+  // trainings' own reports and the plan record: its epochs, best epoch,
+  // cap and patience, and whether patience had run out when it stopped.
+  {
+    const Json plan = uavsim::core::LoadJsonFile(out + "/reproduce.json");
+    const auto rows = CsvRows(out + "/trainings.csv");
+    REQUIRE(rows.size() >= 2);
+    CHECK(rows[0] == std::vector<std::string>{"model", "stage", "epochs", "best_epoch",
+                                              "max_epochs", "patience", "plateau"});
+    std::size_t stages = 0, reached = 0;
+    for (const auto& e : fs::directory_iterator(out + "/models")) {
+      if (e.path().filename().string()[0] == '.') continue;
+      const Json r = uavsim::core::LoadJsonFile((e.path() / "training_report.json").string());
+      for (const Json& st : r["stages"]) {
+        ++stages;
+        const std::string name = st["name"];
+        const bool one = name == "camera" || name == "lidar" || name == "radar";
+        const int cap = plan["training"][one ? "stage1_max_epochs" : "stage2_max_epochs"];
+        const int patience = plan["training"][one ? "stage1_patience" : "stage2_patience"];
+        const int epochs = st["epochs"], best = st["best_epoch"];
+        CHECK(epochs <= cap);
+        const bool plateau = epochs - best >= patience;
+        reached += plateau;
+        const std::string id = e.path().filename().string();
+        const auto row = std::find_if(rows.begin(), rows.end(),
+                                      [&](const auto& c) { return c[0] == id && c[1] == name; });
+        INFO(id << " " << name);
+        REQUIRE(row != rows.end());
+        CHECK((*row)[2] == std::to_string(epochs));
+        CHECK((*row)[3] == std::to_string(best));
+        CHECK((*row)[4] == std::to_string(cap));
+        CHECK((*row)[5] == std::to_string(patience));
+        CHECK((*row)[6] == (plateau ? "yes" : "no"));
+      }
+    }
+    CHECK(rows.size() == stages + 1);
+    CHECK(ReadFile(out + "/report.md")
+              .find(std::to_string(reached) + " of " + std::to_string(stages) +
+                    " training stages reached their validation plateau") != std::string::npos);
+  }
   // The frame split's model was trained on the frame split.
   CHECK(uavsim::core::LoadJsonFile(
             out + "/models/paper-z16-s1-frame/training_report.json")["split"] == "frame");
