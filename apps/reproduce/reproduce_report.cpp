@@ -125,6 +125,7 @@ class Arms {
   // loss when it stopped (by its patience or at the cap).
   struct StageBudget {
     std::string id, stage;
+    bool stage1 = false;  // a node's encoder (camera, lidar, radar), else stage 2
     int epochs = 0, best_epoch = 0, max_epochs = 0, patience = 0;
     bool plateau() const { return epochs - best_epoch >= patience; }
   };
@@ -138,11 +139,11 @@ class Arms {
         StageBudget b;
         b.id = id;
         b.stage = st.value("name", "");
-        const bool stage1 = b.stage == "camera" || b.stage == "lidar" || b.stage == "radar";
+        b.stage1 = b.stage == "camera" || b.stage == "lidar" || b.stage == "radar";
         b.epochs = st.value("epochs", 0);
         b.best_epoch = st.value("best_epoch", 0);
-        b.max_epochs = t.value(stage1 ? "stage1_max_epochs" : "stage2_max_epochs", 0);
-        b.patience = t.value(stage1 ? "stage1_patience" : "stage2_patience", 0);
+        b.max_epochs = t.value(b.stage1 ? "stage1_max_epochs" : "stage2_max_epochs", 0);
+        b.patience = t.value(b.stage1 ? "stage1_patience" : "stage2_patience", 0);
         out.push_back(b);
       }
     }
@@ -801,10 +802,9 @@ void BudgetRecord(Writer& w, const ReproducePlan& plan, const Arms& arms) {
   for (const Arms::StageBudget& b : budgets) {
     csv << b.id << "," << b.stage << "," << b.epochs << "," << b.best_epoch << "," << b.max_epochs
         << "," << b.patience << "," << (b.plateau() ? "yes" : "no") << "\n";
-    const bool is_stage1 = b.stage == "camera" || b.stage == "lidar" || b.stage == "radar";
     reached += b.plateau();
-    stage1 += is_stage1;
-    stage1_reached += is_stage1 && b.plateau();
+    stage1 += b.stage1;
+    stage1_reached += b.stage1 && b.plateau();
   }
   w.Csv("trainings.csv", csv.str());
   const pipeline::TrainingConfig& t = plan.training;

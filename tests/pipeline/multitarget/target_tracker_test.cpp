@@ -38,42 +38,37 @@ struct Sensors {
   Eigen::Vector3d Jitter(double sigma) {
     return sigma * Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
   }
-  Detection Lidar(const Eigen::Vector3d& p, double t) {
+  // What every detection of node `node` at time t carries.
+  static Detection Of(core::Modality modality, int node, double t, GeometricAnchor::Kind kind) {
     Detection d;
-    d.modality = core::Modality::kLidar;
-    d.node = 1;
+    d.modality = modality;
+    d.node = node;
     d.t_capture_s = t;
-    d.anchor.kind = GeometricAnchor::Kind::kPoint;
-    d.anchor.origin_w = p + Jitter(0.1);
-    d.anchor.sensor_w = kLidar;
-    d.anchor.range_m = (d.anchor.origin_w - kLidar).norm();
+    d.anchor.kind = kind;
     d.anchor.t_s = t;
     return d;
   }
+  Detection Lidar(const Eigen::Vector3d& p, double t) {
+    Detection d = Of(core::Modality::kLidar, 1, t, GeometricAnchor::Kind::kPoint);
+    d.anchor.origin_w = p + Jitter(0.1);
+    d.anchor.sensor_w = kLidar;
+    d.anchor.range_m = (d.anchor.origin_w - kLidar).norm();
+    return d;
+  }
   Detection Radar(const Eigen::Vector3d& p, const Eigen::Vector3d& v, double t) {
-    Detection d;
-    d.modality = core::Modality::kRadar;
-    d.node = 2;
-    d.t_capture_s = t;
-    d.anchor.kind = GeometricAnchor::Kind::kPoint;
+    Detection d = Of(core::Modality::kRadar, 2, t, GeometricAnchor::Kind::kPoint);
     const Eigen::Vector3d u = (p - kRadar).normalized();
     d.anchor.origin_w = p + Jitter(0.3);
     d.anchor.sensor_w = kRadar;
     d.anchor.range_m = (p - kRadar).norm() + 0.05 * noise(rng);
     d.anchor.range_rate_mps = u.dot(v) + 0.05 * noise(rng);
     d.anchor.has_range_rate = true;
-    d.anchor.t_s = t;
     return d;
   }
   Detection Ray(const Eigen::Vector3d& p, double t) {
-    Detection d;
-    d.modality = core::Modality::kCamera;
-    d.node = 0;
-    d.t_capture_s = t;
-    d.anchor.kind = GeometricAnchor::Kind::kRay;
+    Detection d = Of(core::Modality::kCamera, 0, t, GeometricAnchor::Kind::kRay);
     d.anchor.origin_w = kEye;
     d.anchor.direction_w = (p + Jitter(0.05) - kEye).normalized();
-    d.anchor.t_s = t;
     return d;
   }
 };
