@@ -9,6 +9,7 @@
 #include <catch2/catch.hpp>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -405,17 +406,50 @@ TEST_CASE(
     CHECK(frame_rows == 9);
   }
 
-  // Nothing left to train: the same artefacts, byte for byte.
-  const auto again = RunCli(args);
+  // Carried to another machine (scripts/carry-reproduction: the finished
+  // trainings without weights, but those of the trainings whose encoders
+  // others reuse; no episode sets, no data-rate runs) and resumed there:
+  // nothing left to train, no episode set simulated or read, the data-rate
+  // runs made again, the same artefacts byte for byte.
+  const std::string carried = dir + "/carried";
+  REQUIRE(std::system(("'" + std::string(UAVSIM_SOURCE_DIR) + "/scripts/carry-reproduction' '" +
+                       out + "' '" + carried + "' >/dev/null")
+                          .c_str()) == 0);
+  {
+    std::set<std::string> reused;
+    ReproduceOptions quick;
+    quick.quick = true;
+    const uavsim::sim::Scenario scenario;  // z = 16, as the default scenario's
+    for (const auto& a : MakeReproducePlan(scenario, quick).arms)
+      if (!a.encoders.empty()) reused.insert(a.encoders);
+    REQUIRE(reused.size() == 4);  // paper and raw at z 16, two seeds
+    std::size_t models = 0;
+    for (const auto& e : fs::directory_iterator(carried + "/models")) {
+      const std::string id = e.path().filename().string();
+      INFO(id);
+      ++models;
+      CHECK(fs::is_regular_file(e.path() / "training_report.json"));
+      CHECK(fs::is_regular_file(e.path() / "model.json"));
+      CHECK(fs::is_regular_file(e.path() / "camera.pt") == (reused.count(id) == 1));
+    }
+    CHECK(models == 58);
+    CHECK_FALSE(fs::exists(carried + "/episodes"));
+  }
+  std::vector<std::string> resume = args;
+  resume[resume.size() - 1] = carried;  // --out
+  const auto again = RunCli(resume);
+  INFO(again.err);
   REQUIRE(again.exit_code == 0);
   CHECK(again.out.find("(58 already done, 0 now)") != std::string::npos);
+  CHECK(fs::is_empty(carried + "/episodes"));
   for (const auto& [a, text] : csvs) {
     INFO(a);
-    CHECK(ReadFile(out + "/" + a + ".csv") == text);
+    CHECK(ReadFile(carried + "/" + a + ".csv") == text);
   }
 
-  // Every invocation's wall time, and how it ended.
-  const auto log = CsvRows(out + "/invocations.csv");
+  // Every invocation's wall time, and how it ended (the carried log and
+  // the resumed invocation's row).
+  const auto log = CsvRows(carried + "/invocations.csv");
   // (SIGKILL leaves no row; the invocations it killed in the episode sets
   // never got past them.)
   REQUIRE(log.size() >= 4);
@@ -425,7 +459,7 @@ TEST_CASE(
   CHECK(log[n - 2][4] == "reported");
   CHECK(log[n - 2][3] == std::to_string(58 - kept));
   CHECK(log[n - 1][3] == "0");
-  CHECK(ReadFile(out + "/report.md").find("over " + std::to_string(n - 1) + " invocation(s)") !=
+  CHECK(ReadFile(carried + "/report.md").find("over " + std::to_string(n - 1) + " invocation(s)") !=
         std::string::npos);
 
   // Another plan into the same folder is refused.
