@@ -427,14 +427,15 @@ TEST_CASE("CLI: the MMAUD twin runs end to end, its two LiDARs as two nodes of o
         Approx(2 * 1280 * 960 * 30 / 1000.0));
   CHECK(metrics["uavloc_model"]["same_layout"] == true);
   CHECK(metrics["uavloc_model"]["trained_for"] == "mmaud_twin");
-  // Trained with our defaults of its time: the camera encoder's three
-  // extensions, TE-Align's window origin and the IB-CC loss in normalised
-  // units (its manifest predates the key), each named (the paper's preset
-  // has none).
+  // Trained by the default model's command on the twin (session 23): the
+  // same departures from the paper, its training config's then its nodes',
+  // each named (the paper's preset has none).
   CHECK(metrics["uavloc_model"]["extensions"] ==
         Json::array({"camera_stereo_branches=shared", "camera_eye_pool_side=4",
                      "camera_roi_geometry=true", "te_align_tau_origin=window",
-                     "ib_mse_units=normalised"}));
+                     "point_frame=centroid", "point_norm=none", "dropout=0",
+                     "stage1_label_gate_m=3", "lidar.weather_echo_rejection=true",
+                     "radar.rain_doppler_rejection=true", "radar.selection=persistent"}));
   // Each LiDAR node sends its own messages, numbered on its own.
   const std::string packets = ReadFile(out + "/packets.csv");
   for (const char* node : {"avia", "mid360"}) {
