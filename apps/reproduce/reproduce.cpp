@@ -12,7 +12,9 @@
 #include <iostream>
 #include <map>
 #include <memory>
+#include <optional>
 #include <set>
+#include <stdexcept>
 
 #include "apps/reproduce/reproduce_report.h"
 #include "apps/sweep/process_farm.h"
@@ -388,10 +390,20 @@ const std::vector<pipeline::Episode>& EpisodesOf(EpisodeSets& sets, const std::s
   return it->second;
 }
 
+// The index of the arm whose stage-1 encoders arm `a` reuses; nullopt: none.
+std::optional<std::size_t> EncoderArm(const ReproducePlan& plan, const ReproduceArm& a) {
+  if (a.encoders.empty()) return std::nullopt;
+  for (std::size_t i = 0; i < plan.arms.size(); ++i)
+    if (plan.arms[i].id == a.encoders) return i;
+  return std::nullopt;
+}
+
 // In the farm's child: trains arm `a` into model_dir.
 void TrainArm(const Scenario& base, const ReproducePlan& plan, const ReproduceOptions& o,
               const std::string& dir, EpisodeSets& sets, const ReproduceArm& a,
               const std::string& model_dir) {
+  if (!a.encoders.empty() && !ArmDone(dir, a.encoders))
+    throw std::runtime_error("the arm whose encoders it reuses, " + a.encoders + ", did not train");
   const pipeline::Variant& v = *pipeline::FindVariant(a.variant);
   const Scenario s = ArmScenario(base, a);
   TrainCommand c;
@@ -412,7 +424,8 @@ void TrainArm(const Scenario& base, const ReproducePlan& plan, const ReproduceOp
   TrainOnEpisodes(s, c, EpisodesOf(sets, dir, a.set), plan.episodes);
 }
 
-// The farm whose task i is the plan's arm i, in DIR/models/<arm>.
+// The farm whose task i is the plan's arm i, in DIR/models/<arm>; an arm
+// that reuses another's encoders starts once that arm has ended.
 ProcessFarm TrainingFarm(const Scenario& base, const ReproducePlan& plan, const ReproduceOptions& o,
                          const std::string& dir, EpisodeSets& sets) {
   ProcessFarm farm;
@@ -428,51 +441,48 @@ ProcessFarm TrainingFarm(const Scenario& base, const ReproducePlan& plan, const 
     for (const auto& [path, bytes] : files) run.WriteText(path, bytes);
     run.Commit();
   };
+  farm.after = [&plan](std::size_t i) { return EncoderArm(plan, plan.arms[i]); };
   return farm;
 }
 
-// The arms of one round still to train: those that train stage 1 (reuse
-// false) or those that reuse them, whose encoders are done (the others
-// are counted as failed at the end); those already done counted into
-// *already_done.
-std::deque<std::size_t> ArmsToTrain(const ReproducePlan& plan, const std::string& dir, bool reuse,
+// The arms still to train, those that train stage 1 first, then those that
+// reuse them; those already done counted into *already_done.
+std::deque<std::size_t> ArmsToTrain(const ReproducePlan& plan, const std::string& dir,
                                     std::size_t* already_done) {
   std::deque<std::size_t> queue;
-  for (std::size_t i = 0; i < plan.arms.size(); ++i) {
-    const ReproduceArm& a = plan.arms[i];
-    if (a.encoders.empty() == reuse) continue;
-    if (ArmDone(dir, a.id)) {
-      ++*already_done;
-      continue;
+  for (const bool reuse : {false, true})
+    for (std::size_t i = 0; i < plan.arms.size(); ++i) {
+      const ReproduceArm& a = plan.arms[i];
+      if (a.encoders.empty() == reuse) continue;
+      if (ArmDone(dir, a.id)) {
+        ++*already_done;
+        continue;
+      }
+      queue.push_back(i);
     }
-    if (reuse && !ArmDone(dir, a.encoders)) continue;  // its encoders failed: counted below
-    queue.push_back(i);
-  }
   return queue;
 }
 
-// The trainings in two rounds, the arms that train stage 1, then those
-// that reuse them: here, or handed out to the ranks under MPI.
+// The trainings in one queue (a reuse arm waits for its encoders' arm):
+// here, or handed out to the ranks under MPI (a shared file system carries
+// the encoders to the rank that reuses them, as it carries the episodes).
 void RunTrainings(const ReproducePlan& plan, const std::string& dir, const ProcessFarm& farm,
                   const FarmOptions& fo, const Ranks& ranks, ReproduceOutcome& out) {
-  const auto add = [&out](const FarmCounts& c) {
-    out.ran += c.ran;
-    out.failed += c.failed;
-  };
-  for (const bool reuse : {false, true}) {
-    if (!ranks.coordinator) {
-      if (ranks.world) ranks.world->barrier();
-      add(RunFarmWorker(*ranks.world, farm, fo));
-      continue;
-    }
-    std::deque<std::size_t> queue = ArmsToTrain(plan, dir, reuse, &out.already_done);
+  FarmCounts c;
+  if (!ranks.coordinator) {
+    if (ranks.world) ranks.world->barrier();
+    c = RunFarmWorker(*ranks.world, farm, fo);
+  } else {
+    std::deque<std::size_t> queue = ArmsToTrain(plan, dir, &out.already_done);
     if (ranks.world) {
       ranks.world->barrier();
-      add(RunFarmCoordinator(*ranks.world, farm, std::move(queue), fo));
+      c = RunFarmCoordinator(*ranks.world, farm, std::move(queue), fo);
     } else {
-      add(RunFarmLocal(farm, std::move(queue), fo));
+      c = RunFarmLocal(farm, std::move(queue), fo);
     }
   }
+  out.ran += c.ran;
+  out.failed += c.failed;
 }
 
 // Tab. II's runs, then every artefact and the report.
@@ -509,7 +519,7 @@ ReproduceOutcome RunReproduce(const Scenario& base, const ReproduceOptions& o) {
   std::optional<core::FileLock> lock;
   EpisodeSets sets = SimulateEpisodeSets(base, plan, o, dir, ranks, lock);
 
-  // 2. The trainings, stage-1 arms first.
+  // 2. The trainings; a reuse arm starts once its encoders exist.
   const ProcessFarm farm = TrainingFarm(base, plan, o, dir, sets);
   FarmOptions fo;
   fo.jobs = o.jobs;
