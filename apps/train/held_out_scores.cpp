@@ -21,10 +21,14 @@ struct Sums {
   double squared = 0.0;
   std::size_t windows = 0;
   std::map<std::pair<std::size_t, std::int64_t>, double> by_window;  // (episode, k - 1)
-  void Add(std::size_t episode, std::int64_t k, double squared_m2) {
+  std::map<std::pair<std::size_t, std::int64_t>, pipeline::Evaluation::Positions> positions;
+  void Add(std::size_t episode, std::int64_t k, const Eigen::Vector3d& estimate,
+           const Eigen::Vector3d& truth, int arrived) {
+    const double squared_m2 = (estimate - truth).squaredNorm();
     squared += squared_m2;
     ++windows;
     by_window[{episode, k - 1}] = squared_m2;
+    positions[{episode, k - 1}] = {estimate, truth, arrived};
   }
 };
 
@@ -53,8 +57,10 @@ void ReplayEpisode(const Scenario& base, const pipeline::Episode& ep, std::size_
   bool started = false;
   for (std::int64_t k = 1; k <= k_count; ++k) {
     pipeline::WindowAnchors anchors;
+    int arrived = 0;  // bit m: Modality m
     const auto& samples = by_window[static_cast<std::size_t>(k - 1)];
     for (const pipeline::Sample* s : samples) {
+      arrived |= 1 << static_cast<int>(s->modality);
       const std::string& node = base.nodes[s->node].id;
       pipeline::GeometricAnchor anchor;
       if (s->camera) {
@@ -72,8 +78,8 @@ void ReplayEpisode(const Scenario& base, const pipeline::Episode& ep, std::size_
     const std::optional<Eigen::Vector3d> p_track = track.OnWindow(k, anchors);
     if (!started || !ep.Scored(k)) continue;
     const Eigen::Vector3d& truth = ep.window_truth[static_cast<std::size_t>(k - 1)];
-    if (p_ekf) ekf_sums.Add(index, k, (*p_ekf - truth).squaredNorm());
-    if (p_track) track_sums.Add(index, k, (*p_track - truth).squaredNorm());
+    if (p_ekf) ekf_sums.Add(index, k, *p_ekf, truth, arrived);
+    if (p_track) track_sums.Add(index, k, *p_track, truth, arrived);
   }
 }
 
@@ -91,6 +97,7 @@ std::map<std::string, pipeline::Evaluation> ScoreClassicalMethods(
       pipeline::Evaluation& ev = out[method];
       ev.windows[key] = sums.windows;
       ev.squared_error_m2[key] = sums.by_window;
+      ev.position_m[key] = sums.positions;
       ev.rmse_m[key] = sums.windows > 0 ? std::sqrt(sums.squared / sums.windows)
                                         : std::numeric_limits<double>::quiet_NaN();
     }

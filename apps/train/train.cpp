@@ -536,6 +536,7 @@ std::optional<std::vector<pipeline::Episode>> GatherEpisodes(
   }
   plan.episodes = static_cast<int>(episodes.size());
   plan.episode_s = todo.episode_s;
+  for (std::size_t i = 0; i < episodes.size(); ++i) episodes[i].index = static_cast<int>(i);
   return episodes;
 }
 

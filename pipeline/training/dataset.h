@@ -94,7 +94,11 @@ class SampleList {
 };
 
 struct Episode {
-  std::string label;  // what varied, for reports: "orbit seed 7 rain 4 mm/h loss 0.12"
+  std::string label;  // what varied, for reports: "figure8 37 x 18 m, rain 4 mm/h, loss 19 %"
+  // Its number in the episode set (EpisodeScenario's i, the HDF5 export's
+  // /episodes/<i>); -1 unknown. Set by whoever reads or gathers the set;
+  // not stored by dataset_io (the position in the file is the number).
+  int index = -1;
   double window_s = 0.2;
   // The modalities whose nodes sent their data without pre-processing
   // (/pipeline/preprocess raw; bit m: Modality m), kRawUnknown for an

@@ -247,6 +247,7 @@ std::vector<Episode> ReadEpisodes(const std::string& path,
   std::vector<Episode> episodes(r.Count(8));
   for (Episode& e : episodes) {
     if (check_stop) check_stop();
+    e.index = static_cast<int>(&e - episodes.data());
     e.label = r.String();
     e.window_s = r.Pod<double>();
     e.raw_modalities = v01 ? Episode::kRawUnknown : r.Pod<std::uint8_t>();

@@ -852,8 +852,9 @@ void TrainOptions::Validate() const {
 
 namespace {
 
-// test_estimates.csv: each trained head's estimate in every counted test
-// window, per modality subset (what Fig. 15's beams are steered at).
+// test_estimates.csv: each method's estimate in every counted test window
+// (the heads', and the classical methods' when scored), per modality subset
+// (what Fig. 15's beams are steered at).
 void WriteTestEstimates(const TrainReport& r, const std::string& path) {
   std::ostringstream f;
   f << "method,subset,episode,window,x_m,y_m,z_m,true_x_m,true_y_m,true_z_m,arrived\n";
@@ -925,6 +926,8 @@ void ScoreClassical(const TrainOptions& o, const TestParts& t, bool have_test,
                     TrainReport& report) {
   for (const auto& [weather, episodes] : t.episodes_by_weather)
     report.test_weather_episodes[weather] = episodes.size();
+  for (const Episode& e : t.episodes)
+    report.test_episodes.push_back({e.index, e.label, WeatherOf(e)});
   if (!o.score_classical || !have_test) return;
   for (auto& [method, ev] : o.score_classical(t.episodes)) report.test[method] = std::move(ev);
   for (const auto& [weather, episodes] : t.episodes_by_weather)
@@ -1134,6 +1137,47 @@ core::Json DecoderScoresJson(const std::map<std::string, DecoderScore>& scores) 
   return decoder;
 }
 
+// Each method's "all" windows of test episode `i` alone.
+std::map<std::string, Evaluation> EpisodeEvaluations(const std::map<std::string, Evaluation>& test,
+                                                     std::size_t i) {
+  std::map<std::string, Evaluation> out;
+  for (const auto& [method, ev] : test) {
+    Evaluation& o = out[method];
+    double sum = 0.0;
+    auto& mine = o.squared_error_m2["all"];
+    if (const auto all = ev.squared_error_m2.find("all"); all != ev.squared_error_m2.end())
+      for (const auto& [window, e] : all->second)
+        if (window.first == i) {
+          mine[window] = e;
+          sum += e;
+        }
+    o.windows["all"] = mine.size();
+    o.rmse_m["all"] = mine.empty() ? std::numeric_limits<double>::quiet_NaN()
+                                   : std::sqrt(sum / static_cast<double>(mine.size()));
+  }
+  return out;
+}
+
+// TrainReport::test_episodes as JSON: per episode, each method over its own
+// windows and over the windows every method counted.
+core::Json TestEpisodesJson(const TrainReport& r) {
+  core::Json episodes = core::Json::array();
+  for (std::size_t i = 0; i < r.test_episodes.size(); ++i) {
+    const std::map<std::string, Evaluation> own = EpisodeEvaluations(r.test, i);
+    core::Json methods = core::Json::object(), common = core::Json::object();
+    for (const auto& [method, ev] : own) methods[method] = EvaluationJson(ev)["all"];
+    for (const auto& [method, ev] : OnCommonWindows(own))
+      common[method] = EvaluationJson(ev)["all"];
+    const int index = r.test_episodes[i].index;
+    episodes.push_back({{"episode", index >= 0 ? core::Json(index) : core::Json(nullptr)},
+                        {"label", r.test_episodes[i].label},
+                        {"weather", r.test_episodes[i].weather},
+                        {"methods", methods},
+                        {"common_windows", common}});
+  }
+  return episodes;
+}
+
 }  // namespace
 
 std::string ReportJson(const TrainReport& r, const TrainOptions& o) {
@@ -1204,6 +1248,7 @@ std::string ReportJson(const TrainReport& r, const TrainOptions& o) {
   core::Json weather_episodes = core::Json::object();
   for (const auto& [weather, n] : r.test_weather_episodes) weather_episodes[weather] = n;
   j["test_weather_episodes"] = weather_episodes;
+  j["test_episodes"] = TestEpisodesJson(r);
   return j.dump(2) + "\n";
 }
 

@@ -154,6 +154,15 @@ struct TrainReport {
   // weather -> scores; and how many test episodes each weather has.
   std::map<std::string, std::map<std::string, Evaluation>> test_by_weather;
   std::map<std::string, std::size_t> test_weather_episodes;
+  // The scored test episodes (Episode::label, WeatherOf), in the order of
+  // Evaluation's episode indices: training_report.json's `test_episodes`
+  // gives each method's RMSE per episode, over its own windows and over
+  // the episode's windows every method counted (where a figure comes from).
+  struct TestEpisode {
+    int index = -1;  // Episode::index
+    std::string label, weather;
+  };
+  std::vector<TestEpisode> test_episodes;
   // `test` and `test_by_weather` on the windows every method counted
   // (OnCommonWindows, per weather within that weather's episodes).
   std::map<std::string, Evaluation> test_common;

@@ -116,6 +116,58 @@ TEST_CASE("CLI: train --quick learns, is deterministic, and its model runs in th
     CHECK(report["test_by_weather_common_windows"][method]["clear"]["all"] ==
           report["test_common_windows"][method]["all"]);
   }
+  // Per test episode: its label and weather, and each method over its own
+  // windows and the common ones; recombined over the episodes (sum of
+  // squared errors, sum of windows) they give the whole test's figures.
+  REQUIRE(report["test_episodes"].size() == 3);
+  std::set<int> numbers;
+  for (const Json& e : report["test_episodes"]) numbers.insert(e["episode"].get<int>());
+  CHECK(numbers.size() == 3);
+  for (const char* method : {"uavloc", "uavloc_anchored", "ekf", "anchor_track"})
+    for (const char* part : {"methods", "common_windows"}) {
+      INFO(method << " " << part);
+      double squared = 0.0;
+      int windows = 0;
+      for (const Json& e : report["test_episodes"]) {
+        CHECK(e["weather"] == "clear");
+        CHECK(e["episode"].get<int>() >= 0);
+        CHECK(e["episode"].get<int>() < 17);
+        const int n = e[part][method]["windows"].get<int>();
+        if (n > 0) squared += n * std::pow(e[part][method]["rmse_m"].get<double>(), 2);
+        windows += n;
+      }
+      const Json& whole = std::string(part) == "methods"
+                              ? report["test"][method]["all"]
+                              : report["test_common_windows"][method]["all"];
+      CHECK(windows == whole["windows"].get<int>());
+      CHECK(std::sqrt(squared / windows) == Approx(whole["rmse_m"].get<double>()).epsilon(1e-6));
+    }
+  // test_estimates.csv holds the classical methods' estimates too: their
+  // RMSE from the rows' positions is the report's, window for window.
+  {
+    std::map<std::string, std::pair<double, int>> sums;  // method -> (squared, windows)
+    std::istringstream csv(ReadFile(model + "/test_estimates.csv"));
+    std::string line;
+    std::getline(csv, line);
+    while (std::getline(csv, line)) {
+      std::vector<std::string> f;
+      std::stringstream row(line);
+      for (std::string cell; std::getline(row, cell, ',');) f.push_back(cell);
+      REQUIRE(f.size() == 11);
+      if (f[1] != "all") continue;
+      double squared = 0.0;
+      for (int c = 0; c < 3; ++c) squared += std::pow(std::stod(f[4 + c]) - std::stod(f[7 + c]), 2);
+      sums[f[0]].first += squared;
+      ++sums[f[0]].second;
+    }
+    for (const char* method : {"uavloc", "ekf", "anchor_track"}) {
+      INFO(method);
+      const auto [squared, windows] = sums[method];
+      CHECK(windows == report["test"][method]["all"]["windows"].get<int>());
+      CHECK(std::sqrt(squared / windows) ==
+            Approx(report["test"][method]["all"]["rmse_m"].get<double>()).epsilon(1e-5));
+    }
+  }
   CHECK(Stage(report, "camera")["best_validation_loss"].get<double>() <
         Stage(report, "camera")["initial_validation_loss"].get<double>());
   const Json manifest = Json::parse(ReadFile(model + "/model.json"));
