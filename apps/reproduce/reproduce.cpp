@@ -24,6 +24,7 @@
 #include "core/file_lock.h"
 #include "core/interrupt.h"
 #include "core/json_io.h"
+#include "core/modality.h"
 #include "pipeline/torch_runtime.h"
 #include "pipeline/training/dataset_io.h"
 #include "pipeline/training_config.h"
@@ -445,15 +446,24 @@ ProcessFarm TrainingFarm(const Scenario& base, const ReproducePlan& plan, const 
   return farm;
 }
 
-// The arms still to train, those that train stage 1 first, then those that
-// reuse them; those already done counted into *already_done.
+// The order an arm waits in: stage-1 arms on raw LiDAR (the longest, by far)
+// first, then the other stage-1 arms, then those that reuse encoders; so
+// the longest trainings do not come last and leave a core idle.
+int QueueRank(const ReproduceArm& a) {
+  if (!a.encoders.empty()) return 2;
+  const std::uint8_t raw = pipeline::FindVariant(a.variant)->raw_modalities;
+  return raw & (1u << static_cast<int>(core::Modality::kLidar)) ? 0 : 1;
+}
+
+// The arms still to train in queue order; those already done counted into
+// *already_done.
 std::deque<std::size_t> ArmsToTrain(const ReproducePlan& plan, const std::string& dir,
                                     std::size_t* already_done) {
   std::deque<std::size_t> queue;
-  for (const bool reuse : {false, true})
+  for (const int rank : {0, 1, 2})
     for (std::size_t i = 0; i < plan.arms.size(); ++i) {
       const ReproduceArm& a = plan.arms[i];
-      if (a.encoders.empty() == reuse) continue;
+      if (QueueRank(a) != rank) continue;
       if (ArmDone(dir, a.id)) {
         ++*already_done;
         continue;
@@ -461,6 +471,12 @@ std::deque<std::size_t> ArmsToTrain(const ReproducePlan& plan, const std::string
       queue.push_back(i);
     }
   return queue;
+}
+
+std::size_t ArmsDone(const ReproducePlan& plan, const std::string& dir) {
+  std::size_t done = 0;
+  for (const ReproduceArm& a : plan.arms) done += ArmDone(dir, a.id);
+  return done;
 }
 
 // The trainings in one queue (a reuse arm waits for its encoders' arm):
@@ -528,9 +544,9 @@ ReproduceOutcome RunReproduce(const Scenario& base, const ReproduceOptions& o) {
   try {
     RunTrainings(plan, dir, farm, fo, ranks, out);
   } catch (const core::Interrupted&) {
-    if (ranks.coordinator)
-      LogInvocation(dir, invocation.started_utc, invocation.WallS(), o.jobs, out.ran,
-                    "interrupted");
+    if (ranks.coordinator)  // the farm's counts are lost with the exception: count the models
+      LogInvocation(dir, invocation.started_utc, invocation.WallS(), o.jobs,
+                    ArmsDone(plan, dir) - out.already_done, "interrupted");
     if (ranks.world) {
       std::cerr << "uavsim: interrupted; finished trainings are kept\n";
       ranks.world->abort(130);
@@ -541,9 +557,7 @@ ReproduceOutcome RunReproduce(const Scenario& base, const ReproduceOptions& o) {
     out.mpi_worker = true;
     return out;
   }
-  std::size_t missing = 0;
-  for (const ReproduceArm& a : plan.arms) missing += !ArmDone(dir, a.id);
-  out.failed = std::max(out.failed, missing);
+  out.failed = std::max(out.failed, plan.arms.size() - ArmsDone(plan, dir));
   if (out.failed > 0) {
     out.wall_s = invocation.WallS();
     LogInvocation(dir, invocation.started_utc, out.wall_s, o.jobs, out.ran, "failed");

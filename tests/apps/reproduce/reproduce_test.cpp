@@ -214,13 +214,14 @@ TEST_CASE(
       CHECK_FALSE(fs::exists(out + "/report.md"));
     }
   }
+  std::size_t before_term = 0;  // finished before the SIGTERMed invocation
   {
     // Killed once a few trainings are done: exit 130 within seconds, only
     // whole model folders left.
     std::vector<std::string> quiet = args;
     quiet.push_back("--quiet");
     Background run(quiet, dir + "/log");
-    const std::size_t before = FinishedTrainings(out);
+    const std::size_t before = before_term = FinishedTrainings(out);
     REQUIRE(run.WaitFor([&] { return FinishedTrainings(out) >= before + 3; }, 900.0));
     kill(run.pid(), SIGTERM);
     REQUIRE((run.WaitFor([] { return false; }, 30.0) || run.Ended()));
@@ -456,6 +457,7 @@ TEST_CASE(
   CHECK(log[0] == std::vector<std::string>{"started_utc", "wall_s", "jobs", "trained", "ended"});
   const std::size_t n = log.size();
   CHECK(log[n - 3][4] == "interrupted");
+  CHECK(log[n - 3][3] == std::to_string(kept - before_term));
   CHECK(log[n - 2][4] == "reported");
   CHECK(log[n - 2][3] == std::to_string(58 - kept));
   CHECK(log[n - 1][3] == "0");
