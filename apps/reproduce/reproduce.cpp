@@ -14,6 +14,7 @@
 #include <memory>
 #include <optional>
 #include <set>
+#include <sstream>
 #include <stdexcept>
 
 #include "apps/reproduce/reproduce_report.h"
@@ -172,16 +173,24 @@ void RunDataRates(const Scenario& base, const ReproducePlan& plan, const std::st
 
 // DIR/invocations.csv gets a row per invocation that got past the
 // episodes: when it started, its wall time, what it trained, how it ended
-// (reported, failed, interrupted; a SIGKILL leaves no row).
+// (reported, failed, interrupted). The row is written as the trainings
+// start and again as each ends, reading `killed` until the invocation
+// ends: a row left so is an invocation killed (SIGKILL, a machine
+// stopped), its wall time and trainings up to its last finished training.
 void LogInvocation(const std::string& dir, const std::string& started_utc, double wall_s, int jobs,
                    std::size_t trained, const std::string& ended) {
   const std::string file = (fs::path(dir) / "invocations.csv").string();
   std::error_code ec;
-  std::string text = fs::is_regular_file(file, ec) ? core::ReadFileBytes(file)
-                                                   : "started_utc,wall_s,jobs,trained,ended\n";
-  text += started_utc + "," + core::FormatNumber(std::round(wall_s * 10.0) / 10.0) + "," +
-          std::to_string(jobs) + "," + std::to_string(trained) + "," + ended + "\n";
-  core::WriteFileAtomic(file, text);
+  const std::string old = fs::is_regular_file(file, ec) ? core::ReadFileBytes(file)
+                                                        : "started_utc,wall_s,jobs,trained,ended\n";
+  const std::string row = started_utc + "," + core::FormatNumber(std::round(wall_s * 10.0) / 10.0) +
+                          "," + std::to_string(jobs) + "," + std::to_string(trained) + "," + ended +
+                          "\n";
+  std::string text;  // every row but this invocation's earlier one, then this one
+  std::istringstream lines(old);
+  for (std::string line; std::getline(lines, line);)
+    if (line.rfind(started_utc + ",", 0) != 0) text += line + "\n";
+  core::WriteFileAtomic(file, text + row);
 }
 
 std::string UtcNow() {
@@ -536,7 +545,16 @@ ReproduceOutcome RunReproduce(const Scenario& base, const ReproduceOptions& o) {
   EpisodeSets sets = SimulateEpisodeSets(base, plan, o, dir, ranks, lock);
 
   // 2. The trainings; a reuse arm starts once its encoders exist.
-  const ProcessFarm farm = TrainingFarm(base, plan, o, dir, sets);
+  ProcessFarm farm = TrainingFarm(base, plan, o, dir, sets);
+  const std::size_t done_before = ranks.coordinator ? ArmsDone(plan, dir) : 0;
+  const auto log_so_far = [&](const std::string& ended) {  // counts the model folders
+    LogInvocation(dir, invocation.started_utc, invocation.WallS(), o.jobs,
+                  ArmsDone(plan, dir) - done_before, ended);
+  };
+  if (ranks.coordinator) {
+    log_so_far("killed");
+    farm.ended = [&](std::size_t, int) { log_so_far("killed"); };
+  }
   FarmOptions fo;
   fo.jobs = o.jobs;
   fo.quiet = o.quiet;
@@ -544,9 +562,7 @@ ReproduceOutcome RunReproduce(const Scenario& base, const ReproduceOptions& o) {
   try {
     RunTrainings(plan, dir, farm, fo, ranks, out);
   } catch (const core::Interrupted&) {
-    if (ranks.coordinator)  // the farm's counts are lost with the exception: count the models
-      LogInvocation(dir, invocation.started_utc, invocation.WallS(), o.jobs,
-                    ArmsDone(plan, dir) - out.already_done, "interrupted");
+    if (ranks.coordinator) log_so_far("interrupted");  // the farm's counts are lost with it
     if (ranks.world) {
       std::cerr << "uavsim: interrupted; finished trainings are kept\n";
       ranks.world->abort(130);

@@ -848,8 +848,8 @@ std::size_t Introduction(Writer& w, const ReproduceReportInputs& in, const Arms&
            " CPU-minutes in the training stages; wall time " +
            core::FormatNumber(std::round(total_wall_s / 6.0) / 10.0) + " min over " +
            std::to_string(invocations) +
-           " invocation(s), each in invocations.csv (episodes simulated by an interrupted "
-           "invocation are not counted there).");
+           " invocation(s), each in invocations.csv (an invocation stopped before its trainings "
+           "began has no row there; one killed counts to its last finished training).");
   BudgetRecord(w, plan, arms);
   return protocol_at;
 }

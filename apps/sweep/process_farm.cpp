@@ -215,6 +215,7 @@ FarmCounts RunFarmLocal(const ProcessFarm& farm, std::deque<std::size_t> tasks,
       queue.Ended(done->first);
       done->second == 0 ? ++counts.ran : ++counts.failed;
       progress.Update(static_cast<double>(counts.ran + counts.failed));
+      if (farm.ended) farm.ended(done->first, done->second);
     }
     if (!busy) Nap();
   }
@@ -236,6 +237,7 @@ FarmCounts RunFarmCoordinator(boost::mpi::communicator& world, const ProcessFarm
     queue.Ended(task);
     rc == 0 ? ++counts.ran : ++counts.failed;
     progress.Update(static_cast<double>(counts.ran + counts.failed));
+    if (farm.ended) farm.ended(task, rc);
   };
   while (!queue.empty() || !pool.empty() || workers > 0 || remote > 0) {
     pool.ThrowIfInterrupted();

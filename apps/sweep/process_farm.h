@@ -48,6 +48,9 @@ struct ProcessFarm {
   // `task` starts, if it is among the tasks run; nullopt: none. (A sweep's
   // points that replay a sensing trace wait for the point that writes it.)
   std::function<std::optional<std::size_t>(std::size_t task)> after;
+  // Optional: at rank 0, once task `task` has ended with exit code `rc` (0:
+  // succeeded) and its files are in place.
+  std::function<void(std::size_t task, int rc)> ended;
 };
 
 struct FarmOptions {

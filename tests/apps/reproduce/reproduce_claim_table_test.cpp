@@ -86,13 +86,14 @@ TEST_CASE("Reproduce claim table: every row reads what the report measures, as s
       CHECK(Clean(c.paper) == shipped[k].paper);
       CHECK(c.ours.find('{') == std::string::npos);
       CHECK((row.rule == ClaimRow::kCriterion) == c.comparisons.empty());
-      // The comparisons split by trajectory, as the report lists them (its
-      // Fig. 10a frame split predates its comparisons in claims.csv).
-      std::vector<std::string> mine, theirs;
-      for (const auto& x : c.comparisons)
-        if (!x.frame) mine.push_back(Clean(x.comparison.what));
-      for (const auto& x : shipped[k].comparisons) theirs.push_back(x.comparison.what);
-      CHECK(mine == theirs);
+      // The comparisons, those split by trajectory and those by frame, as
+      // the report lists them (a report from before issue 48, the twin's,
+      // has no frame-split comparisons in its claims.csv).
+      std::vector<std::string> mine[2], theirs[2];
+      for (const auto& x : c.comparisons) mine[x.frame].push_back(Clean(x.comparison.what));
+      for (const auto& x : shipped[k].comparisons) theirs[x.frame].push_back(x.comparison.what);
+      CHECK(mine[0] == theirs[0]);
+      if (!theirs[1].empty() || std::string(name) == "city") CHECK(mine[1] == theirs[1]);
     }
   }
   const ReproduceClaim fig10a = MakeClaim(PaperClaim("fig10a.more_modalities"), m);

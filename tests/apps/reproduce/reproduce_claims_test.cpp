@@ -39,11 +39,16 @@ std::vector<std::vector<std::string>> Rows(const std::string& text) {
 }
 
 // The text without the lines that contain `what`.
+// `text` without the lines holding `what`, each with the blank line after
+// it (a paragraph of Markdown).
 std::string Without(const std::string& text, const std::string& what) {
   std::istringstream in(text);
   std::string line, out;
-  while (std::getline(in, line))
-    if (line.find(what) == std::string::npos) out += line + "\n";
+  bool dropped = false;
+  while (std::getline(in, line)) {
+    if (!(dropped && line.empty()) && line.find(what) == std::string::npos) out += line + "\n";
+    dropped = line.find(what) != std::string::npos;
+  }
   return out;
 }
 

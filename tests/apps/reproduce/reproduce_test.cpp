@@ -451,11 +451,18 @@ TEST_CASE(
   // Every invocation's wall time, and how it ended (the carried log and
   // the resumed invocation's row).
   const auto log = CsvRows(carried + "/invocations.csv");
-  // (SIGKILL leaves no row; the invocations it killed in the episode sets
-  // never got past them.)
+  // (An invocation SIGKILLed in the episode sets has no row; one killed
+  // in its trainings reads `killed`, with what it finished.)
   REQUIRE(log.size() >= 4);
   CHECK(log[0] == std::vector<std::string>{"started_utc", "wall_s", "jobs", "trained", "ended"});
   const std::size_t n = log.size();
+  CHECK(n - 4 <= 3);  // at most one row per SIGKILLed invocation
+  std::size_t trained_by_killed = 0;
+  for (std::size_t i = 1; i + 3 < n; ++i) {
+    CHECK(log[i][4] == "killed");
+    trained_by_killed += std::stoul(log[i][3]);
+  }
+  CHECK(trained_by_killed <= before_term);  // as of their last finished training
   CHECK(log[n - 3][4] == "interrupted");
   CHECK(log[n - 3][3] == std::to_string(kept - before_term));
   CHECK(log[n - 2][4] == "reported");
