@@ -104,7 +104,9 @@ class Reader {
     }
     if (m_.seeds.count(key)) return MeanCiText(SummariseSeeds(m_.seeds.at(key)), decimals);
     const double x = Number(key);
-    return std::isfinite(x) ? results::FormatFixed(x, decimals) : "";
+    if (!std::isfinite(x)) return "";
+    while (x != 0.0 && decimals < 12 && std::abs(x) < 0.5 * std::pow(10.0, -decimals)) ++decimals;
+    return results::FormatFixed(x, decimals);
   }
 
   const ClaimRow& row_;

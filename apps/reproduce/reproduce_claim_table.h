@@ -14,7 +14,9 @@
 // is the artefact file's prefix, fig12 for fig12_alignment.csv, or fig11
 // for what Figs. 11a and 11b give together), written as the mean over
 // seeds with its 95 % interval ("6.14 ± 1.70"; a single number as it is,
-// "" when not finite), to 2 decimals unless stated.
+// "" when not finite), to 2 decimals unless stated; a single number that is
+// not zero gets the decimals its first significant digit needs (0.0002, not
+// 0.000).
 #pragma once
 
 #include <map>

@@ -131,6 +131,9 @@ TEST_CASE("Reproduce claim table: comparisons, texts and criteria against hand c
   };
   CHECK(share(25.0, 20.0) == "holds: both within 20-30 % (camera 25.000 %, radar 20.000 %)");
   CHECK(share(4.8, 0.0).rfind("mixed: both reduced, not to 20-30 %", 0) == 0);
+  // A share that is not zero never reads as zero: its first significant digit shows.
+  CHECK(share(4.815, 0.000213).find("(camera 4.815 %, radar 0.0002 %)") != std::string::npos);
+  CHECK(share(4.815, 0.0).find("radar 0.000 %)") != std::string::npos);
   CHECK(share(25.0, 100.0).rfind("does not hold: not reduced", 0) == 0);
   // Fig. 15: within 5 % of the perfect beam, by the interval's ends.
   const auto gap = [&](std::vector<double> seeds) {
