@@ -1,6 +1,8 @@
 #include "core/interrupt.h"
 
+#include <signal.h>
 #include <atomic>
+
 #include <csignal>
 
 namespace uavsim::core {
@@ -21,6 +23,23 @@ void InstallInterruptHandlers() {
   sigaction(SIGINT, &sa, nullptr);
   sigaction(SIGTERM, &sa, nullptr);
 }
+
+namespace {
+void MaskTermination(int how) {
+  sigset_t termination;
+  sigemptyset(&termination);
+  sigaddset(&termination, SIGINT);
+  sigaddset(&termination, SIGTERM);
+  sigprocmask(how, &termination, nullptr);
+}
+}  // namespace
+
+void TakeOverTerminationSignals() {
+  InstallInterruptHandlers();
+  MaskTermination(SIG_UNBLOCK);
+}
+
+void BlockTerminationSignals() { MaskTermination(SIG_BLOCK); }
 
 void RequestInterrupt() noexcept { g_interrupt.store(true, std::memory_order_relaxed); }
 

@@ -19,6 +19,16 @@ struct Interrupted : std::runtime_error {
 // Installs SIGINT/SIGTERM handlers that call RequestInterrupt.
 void InstallInterruptHandlers();
 
+// A program started with SIGINT and SIGTERM blocked (the `uavsim`
+// launcher, apps/cli/launcher.cpp, blocks them over the dynamic loader's
+// work) takes them over: installs the handlers, then unblocks them, so one
+// that came meanwhile is delivered now.
+void TakeOverTerminationSignals();
+
+// Blocks SIGINT and SIGTERM again, before this process runs another
+// program in its place (execv keeps them pending for it).
+void BlockTerminationSignals();
+
 // Records a termination request. Async-signal-safe.
 void RequestInterrupt() noexcept;
 

@@ -142,7 +142,11 @@ std::string DescribeValue(const Json& j) {
     }
     case Json::value_t::string: {
       std::string s = j.dump(-1, ' ', false, Json::error_handler_t::replace);
-      if (s.size() > 48) s = s.substr(0, 44) + "...\"";
+      if (s.size() > 48) {
+        std::size_t cut = 44;  // on a character's first byte, never inside UTF-8
+        while (cut > 0 && (static_cast<unsigned char>(s[cut]) & 0xC0) == 0x80) --cut;
+        s = s.substr(0, cut) + "...\"";
+      }
       return s;
     }
     default:

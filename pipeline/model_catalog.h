@@ -26,53 +26,27 @@
 #include "core/modality.h"
 #include "pipeline/localization_method.h"
 #include "pipeline/model_bundle.h"
+#include "pipeline/model_resolution.h"
 #include "pipeline/pipeline_config.h"
 
 namespace uavsim::pipeline {
 
 class NodeEncoder;
 
-// What of a scenario the catalog reads.
-struct CatalogScenario {
-  const PipelineConfig* pipeline = nullptr;
-  std::string base_dir;     // the scenario file's folder: relative paths start here
-  std::string file;         // the scenario file errors name
-  std::string layout_hash;  // the scenario's world and node layout (a model's "layout_hash")
-};
-
-// Whether the scenario runs a method that needs a trained model (uavloc and
-// its variants and subsets, uavloc_anchored, TorchScript and Python methods: they run
-// on the model's latents).
-bool NeedsTrainedModel(const PipelineConfig& p);
-
-// Whether the nodes send geometric anchors with their latents: a method that
-// reads them runs (uavloc_anchored, anchor_track).
-bool SendsAnchors(const PipelineConfig& p);
-
-// The manifest path of a model folder given on a command line (`--model
-// DIR`, "default": the shipped one unless a folder of that name exists),
-// checked as CheckEncoderModel (sim/edge_server.h) says.
-std::string ResolveEncoderModel(const CatalogScenario& s, const std::string& dir,
-                                const std::string& command);
-
 class ModelCatalog {
  public:
   // Resolves and checks every model the scenario's methods run without
-  // loading weights: the model's manifest parses, its folder's checksums
-  // hold, it has each method's edge head, its latent size and window
-  // length are the scenario's, a raw-variant model meets raw
-  // pre-processing, and each variant's folder is that variant with the
-  // same encoders. Nothing when no method needs a model.
+  // loading weights (ResolveModels).
   explicit ModelCatalog(CatalogScenario s);
   ~ModelCatalog();
   ModelCatalog(ModelCatalog&&) noexcept;
 
-  bool needs_model() const { return needs_model_; }
+  bool needs_model() const { return resolved_.needs_model; }
   // The scenario model's manifest (empty when no method needs a model).
-  const std::string& model_path() const { return model_path_; }
+  const std::string& model_path() const { return resolved_.model_path; }
   // Model folders without checksums.sha256 (older models): only loading
   // them checks their files.
-  const std::vector<std::string>& unchecked() const { return unchecked_; }
+  const std::vector<std::string>& unchecked() const { return resolved_.unchecked; }
 
   // Loads the TorchScript methods' files and checks their signatures.
   void LoadScripted();
@@ -95,15 +69,8 @@ class ModelCatalog {
   std::unique_ptr<LocalizationMethod> MakeMethod(const std::string& name);
 
  private:
-  void ResolveModel();
-  void ResolveVariants();
-
   CatalogScenario s_;
-  bool needs_model_ = false;
-  std::string model_path_;  // the scenario model's manifest
-  ModelManifest manifest_;
-  std::map<std::string, std::string> variant_paths_;  // variant -> manifest
-  std::vector<std::string> unchecked_;
+  ModelResolution resolved_;
   std::unique_ptr<UavLocModelFiles> model_;
   std::map<std::string, std::unique_ptr<UavLocModelFiles>> variant_models_;
   std::map<std::string, std::unique_ptr<ScriptedEdge>> scripted_;

@@ -1,7 +1,6 @@
 #include "results/gnuplot.h"
 
 #include <fcntl.h>
-#include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -17,7 +16,7 @@
 #include <system_error>
 #include <vector>
 
-extern char** environ;
+#include "core/child_process.h"
 
 namespace uavsim::results {
 namespace {
@@ -30,26 +29,65 @@ bool HasControlChars(const std::string& s) {
   return false;
 }
 
+// Starts argv (no shell, PATH searched) in a child that dies with this
+// process (core/child_process.h: a plot never lands in a killed command's
+// output), stdin from /dev/null, stdout and stderr into `out_fd`. Returns
+// the child's pid, or -1 with `err` set to why it could not start.
+pid_t Spawn(const std::vector<std::string>& args, int out_fd, int& err) {
+  std::vector<char*> argv;
+  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  int status_pipe[2];  // the exec's errno, if it fails; closed by a good exec
+  if (pipe2(status_pipe, O_CLOEXEC) != 0) {
+    err = errno;
+    return -1;
+  }
+  const pid_t parent = getpid();
+  const pid_t pid = fork();
+  if (pid == 0) {  // only async-signal-safe calls until exec
+    core::DieWithParent(parent);
+    const int null_fd = open("/dev/null", O_RDONLY | O_CLOEXEC);
+    if (null_fd < 0 || dup2(null_fd, 0) < 0 || dup2(out_fd, 1) < 0 || dup2(out_fd, 2) < 0) {
+      const int e = errno;
+      (void)!write(status_pipe[1], &e, sizeof e);
+      _exit(127);
+    }
+    execvp(argv[0], argv.data());
+    const int e = errno;
+    (void)!write(status_pipe[1], &e, sizeof e);
+    _exit(127);
+  }
+  const int fork_errno = errno;
+  close(status_pipe[1]);
+  if (pid < 0) {
+    close(status_pipe[0]);
+    err = fork_errno;
+    return -1;
+  }
+  int child_errno = 0;
+  ssize_t n;
+  while ((n = read(status_pipe[0], &child_errno, sizeof child_errno)) < 0 && errno == EINTR) {
+  }
+  close(status_pipe[0]);
+  if (n == static_cast<ssize_t>(sizeof child_errno)) {
+    while (waitpid(pid, nullptr, 0) < 0 && errno == EINTR) {
+    }
+    err = child_errno;
+    return -1;
+  }
+  return pid;
+}
+
 // Runs argv (no shell) with stdin from /dev/null and stdout+stderr captured.
 // Returns "" on exit status 0, else the reason.
 std::string Run(const std::vector<std::string>& args) {
   int fds[2];
-  if (pipe(fds) != 0) return std::string("cannot create a pipe: ") + std::strerror(errno);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
-  posix_spawn_file_actions_adddup2(&actions, fds[1], 1);
-  posix_spawn_file_actions_adddup2(&actions, fds[1], 2);
-  posix_spawn_file_actions_addclose(&actions, fds[0]);
-  posix_spawn_file_actions_addclose(&actions, fds[1]);
-  std::vector<char*> argv;
-  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-  argv.push_back(nullptr);
-  pid_t pid = 0;
-  const int err = posix_spawnp(&pid, argv[0], &actions, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
+  if (pipe2(fds, O_CLOEXEC) != 0)
+    return std::string("cannot create a pipe: ") + std::strerror(errno);
+  int err = 0;
+  const pid_t pid = Spawn(args, fds[1], err);
   close(fds[1]);
-  if (err != 0) {
+  if (pid < 0) {
     close(fds[0]);
     if (err == ENOENT)
       return "gnuplot not found (\"" + args[0] + "\"): install gnuplot to get PNG plots";

@@ -14,12 +14,21 @@ namespace uavsim::results {
 namespace fs = std::filesystem;
 
 bool ProcessAlive(pid_t pid) {
+  if (pid <= 0) return false;  // no process's number (kill() would take it as a group)
   if (::kill(pid, 0) != 0 && errno == ESRCH) return false;
+  // kill() also finds a process that has ended but is not yet reaped (a
+  // zombie, while its parent has not waited for it; 'X' while it is being
+  // reaped): it runs nothing and writes nothing, so what it left is stale.
   std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
   std::string line;
-  if (!std::getline(stat, line)) return true;  // no /proc: trust kill()
+  if (!std::getline(stat, line)) {
+    std::error_code ec;  // gone since kill(), unless there is no /proc to read
+    return !fs::exists("/proc/self/stat", ec);
+  }
   const auto paren = line.rfind(')');
-  return paren == std::string::npos || paren + 2 >= line.size() || line[paren + 2] != 'Z';
+  if (paren == std::string::npos || paren + 2 >= line.size()) return true;
+  const char state = line[paren + 2];
+  return state != 'Z' && state != 'X' && state != 'x';
 }
 
 std::optional<pid_t> StagingOwner(const std::string& folder_name, std::string* final_name) {

@@ -62,15 +62,6 @@ std::vector<std::unique_ptr<pipeline::LocalizationMethod>> MakeMethods(
 
 }  // namespace
 
-pipeline::CatalogScenario CatalogOf(const Scenario& s, const std::string& file) {
-  pipeline::CatalogScenario c;
-  c.pipeline = &s.pipeline;
-  c.base_dir = s.base_dir;
-  c.file = file;
-  c.layout_hash = LayoutHash(s);
-  return c;
-}
-
 std::unique_ptr<pipeline::Ekf> MakeEkf(const Scenario& s) {
   pipeline::EkfConfig config = s.pipeline.ekf;
   const UavConfig& target = s.uavs[FirstTarget(s)];
@@ -121,15 +112,14 @@ std::string EdgeServer::encoder_fingerprint() const {
 
 void CheckTrainedModel(const Scenario& s, const std::string& file, bool quiet,
                        const HostedMethods* hosted) {
-  CheckHostedMethods(s, file, hosted);
-  pipeline::ModelCatalog catalog(CatalogOf(s, file));
-  if (!catalog.needs_model()) return;
+  if (!CheckModelFiles(s, file, hosted)) return;
   pipeline::InitTorch(1, s.seed);
+  pipeline::ModelCatalog catalog(CatalogOf(s, file));
   catalog.LoadScripted();
   if (catalog.unchecked().empty()) return;
   // Nothing vouches for such a folder's files (a truncated radar.pt passed
-  // validate, issue 43): they are checked as the run reads them, by
-  // loading every one the run loads.
+  // validate once): they are checked as the run reads them, by loading
+  // every one the run loads.
   { const EdgeServer loaded(s, file, /*quiet=*/true, /*methods=*/true, hosted); }
   if (!quiet)
     for (const std::string& p : catalog.unchecked())

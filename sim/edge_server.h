@@ -36,13 +36,11 @@
 #include "pipeline/model_catalog.h"
 #include "pipeline/node/node_encoder.h"
 #include "sim/hosted_method.h"
+#include "sim/model_check.h"
 #include "sim/scenario.h"
 #include "sim/sensing_node.h"
 
 namespace uavsim::sim {
-
-// What the model catalog reads of the scenario (`file`: the name errors give).
-pipeline::CatalogScenario CatalogOf(const Scenario& s, const std::string& file);
 
 // What `validate` checks of that model: the manifest exists and parses,
 // the folder's checksums hold, it has the edge head each method needs, and

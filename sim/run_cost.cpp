@@ -8,20 +8,46 @@
 #include <filesystem>
 
 #include "core/error.h"
+#include "pipeline/model_resolution.h"
 
 namespace uavsim::sim {
 namespace {
 
-// Measured on the 2-core reference machine under the load of two other
-// builds (NOTES.md, 2026-12-04; idle, runs take about 0.4x as long): the
-// default run for 0.2 and 10 s (2.04e7 rays and 55 frames per simulated
-// second: 1.55 and 9.3 s), the same with the LiDAR at 2000 Hz (2045 frames
-// a second: 11.2 s) and with no nodes (1.0 s).
-constexpr double kReferenceCores = 2.0;
-constexpr double kSetupS = 1.4;            // the world's BVH, the model, the libraries
-constexpr double kWallPerRayS = 3.8e-8;    // per ray cast and its pixel's or point's work
-constexpr double kWallPerFrameS = 9.5e-5;  // per frame: its slices, pre-processing, message
-constexpr double kWallPerSimS = 0.01;      // the event loop, uplinks, windows, scoring
+// The wall-time model: a run's work counted from its scenario (pixels,
+// rays, IF-cube samples, encoder passes, windows) times what each unit of
+// work costs this build, per core, on the project's 2-core reference
+// machine when idle (docs/speed.md "Wall-time model": how each was measured,
+// on scenarios/default.json alone; the other shipped scenarios check it).
+constexpr double kSetupS = 0.6;              // the libraries, the world's BVH, the model
+constexpr double kCameraPerPixelS = 2.6e-8;  // per eye pixel: its ray, shading, pre-processing
+constexpr double kCameraEncodeS = 5.0e-3;    // one pass of the image encoder (two 128 x 128 crops)
+constexpr double kLidarPerRayS = 1.0e-7;     // per beam: its ray, pre-processing and encoder
+constexpr double kRadarPerCubeSampleS = 1.0e-7;  // per IF-cube sample: synthesis, FFTs, CFAR
+constexpr double kPerFrameS = 1.0e-4;            // per frame: slices, message, uplink
+constexpr double kPerMethodWindowS = 1.0e-3;     // per method and alignment window, at the edge
+
+// Seconds of one core a frame of `sensor` costs.
+double FrameSeconds(const sensors::SensorConfig& sensor, const pipeline::PipelineConfig& p) {
+  double s = kPerFrameS;
+  switch (sensor.type) {
+    case sensors::SensorType::kFisheyeStereo:
+      s += kCameraPerPixelS * 2.0 * sensor.fisheye.width_px * sensor.fisheye.height_px;
+      // The image encoder runs on each observation a frame sends, at most
+      // max_observations (when a learned method needs the latents).
+      if (pipeline::NeedsTrainedModel(p)) s += kCameraEncodeS * p.preprocess.max_observations;
+      break;
+    case sensors::SensorType::kLidar:
+      s += kLidarPerRayS * sensor.RaysPerFrame();
+      break;
+    case sensors::SensorType::kFmcwRadar: {
+      const auto& r = sensor.radar;
+      s += kRadarPerCubeSampleS * r.adc_samples * static_cast<double>(r.chirps_per_frame) * r.nx *
+           r.ny;
+      break;
+    }
+  }
+  return s;
+}
 
 // Bytes of one recorded frame of `sensor`, at most: its files and their
 // index rows.
@@ -45,19 +71,22 @@ double RecordedFrameBytes(const sensors::SensorConfig& sensor) {
 }  // namespace
 
 double EstimateWallSeconds(const Scenario& s) {
-  double rays_per_s = 0.0, frames_per_s = 0.0;
+  // Each node senses on a thread of its own: the nodes' work spreads over
+  // the cores, but no faster than the busiest node alone.
+  double total_per_s = 0.0, busiest_per_s = 0.0;
   for (const NodeConfig& n : s.nodes) {
-    rays_per_s += n.sensor.RaysPerFrame() * n.sensor.timing().rate_hz;
-    frames_per_s += n.sensor.timing().rate_hz;
+    const double per_s = FrameSeconds(n.sensor, s.pipeline) * n.sensor.timing().rate_hz;
+    total_per_s += per_s;
+    busiest_per_s = std::max(busiest_per_s, per_s);
   }
-  const long cores = ::sysconf(_SC_NPROCESSORS_ONLN);
-  // Nodes capture on threads of their own: more cores, proportionally less
-  // wall time for the sensors' part, at best.
-  const double speedup =
-      std::max(1.0, static_cast<double>(cores > 0 ? cores : 1) / kReferenceCores);
-  const double per_sim_s =
-      (rays_per_s * kWallPerRayS + frames_per_s * kWallPerFrameS) / speedup + kWallPerSimS;
-  return kSetupS + s.duration_s * per_sim_s;
+  const long online = ::sysconf(_SC_NPROCESSORS_ONLN);
+  const double cores = static_cast<double>(online > 0 ? online : 1);
+  // Per-core costs are the reference machine's: a machine of another core
+  // count is assumed as fast per core.
+  const double nodes_per_s = std::max(total_per_s / cores, busiest_per_s);
+  const double edge_per_s =
+      kPerMethodWindowS * static_cast<double>(s.pipeline.methods.size()) / s.pipeline.window_s;
+  return kSetupS + s.duration_s * (nodes_per_s + edge_per_s);
 }
 
 double EstimateRecordBytes(const Scenario& s, const std::vector<std::string>& modalities) {

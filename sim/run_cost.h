@@ -1,10 +1,9 @@
-// What a run will cost before it starts (issue 43): its wall time on this
-// machine, estimated from the rays and the frames per simulated second, and
-// the bytes `--record` would write. Upper estimates for the disk (a PNG or
-// PLY at most its raw frame plus headers); the wall time from per-ray and
-// per-frame costs measured on the project's 2-core reference machine under
-// load (an upper estimate on an idle one; the figures are in NOTES.md), scaled by
-// this machine's core count.
+// What a run will cost before it starts: its wall time, from a model of
+// this build's costs (the scenario's pixels, rays, radar cube samples,
+// encoder passes and windows, each at its cost per core on the project's
+// 2-core reference machine when idle: docs/speed.md "Wall-time model"),
+// never from a timing taken now; and the bytes `--record` would write (upper
+// estimates: a PNG or PLY at most its raw frame plus headers).
 #pragma once
 
 #include <string>
@@ -14,7 +13,8 @@
 
 namespace uavsim::sim {
 
-// Seconds of wall time the run would take here (its set-up included).
+// Seconds of wall time the run would take on an idle machine of this core
+// count, cores as fast as the reference machine's (its set-up included).
 double EstimateWallSeconds(const Scenario& s);
 
 // Bytes `uavsim run --record` of `modalities` ("camera", "lidar", "radar",

@@ -6,7 +6,10 @@
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
+#include <string_view>
 #include <type_traits>
+
+#include <zlib.h>
 
 #include "core/atomic_file.h"
 #include "core/error.h"
@@ -48,9 +51,11 @@ class Out {
   std::string& s_;
 };
 
+// Reads a record's content; running past it is a malformed record (its CRC
+// held, so the writer and this reader disagree: a trace of another build).
 class In {
  public:
-  In(const std::string& s, const std::string& path) : s_(s), path_(path) {}
+  In(std::string_view s, const std::string& what) : s_(s), what_(what) {}
   template <class T>
   T Get() {
     T v;
@@ -62,7 +67,7 @@ class In {
   std::string Str() {
     const auto n = Get<std::uint32_t>();
     Need(n);
-    std::string v = s_.substr(at_, n);
+    std::string v(s_.substr(at_, n));
     at_ += n;
     return v;
   }
@@ -79,14 +84,17 @@ class In {
     for (int i = 0; i < v.size(); ++i) v[i] = Get<typename Vec::Scalar>();
   }
   bool AtEnd() const { return at_ == s_.size(); }
+  std::size_t Left() const { return s_.size() - at_; }
+  [[noreturn]] void Malformed() const {
+    throw core::UsageError(what_ + " is malformed; remove it to sense again");
+  }
 
  private:
   void Need(std::size_t n) const {
-    if (s_.size() - at_ < n)
-      throw core::UsageError(path_ + ": a sensing trace cut short; remove it to sense again");
+    if (s_.size() - at_ < n) Malformed();
   }
-  const std::string& s_;
-  const std::string& path_;
+  std::string_view s_;
+  const std::string& what_;
   std::size_t at_ = 0;
 };
 
@@ -122,8 +130,115 @@ pipeline::PointObservation GetPoints(In& in) {
   p.t_s = in.Get<double>();
   p.channels = in.Get<std::int32_t>();
   p.values = in.Floats();
+  if (p.channels < 1 || p.channels > 16 || p.values.size() % p.channels != 0) in.Malformed();
   in.Vector(p.sensor_position_w);
   return p;
+}
+
+std::uint32_t Crc32(std::string_view bytes) {
+  // Records stay far below zlib's 4 GiB a call.
+  return static_cast<std::uint32_t>(crc32(crc32(0L, Z_NULL, 0),
+                                          reinterpret_cast<const Bytef*>(bytes.data()),
+                                          static_cast<uInt>(bytes.size())));
+}
+
+// Appends a record to `file`: its prefix (tag, or magic and version), the
+// size of `body`, `body`, and the CRC-32 of all three.
+void PutRecord(std::string& file, std::string_view prefix, const std::string& body) {
+  const std::size_t at = file.size();
+  file += prefix;
+  Out o(file);
+  o.Put(static_cast<std::uint32_t>(body.size()));
+  file += body;
+  o.Put(Crc32(std::string_view(file).substr(at)));
+}
+
+constexpr std::size_t kDigestChars = 64;
+constexpr std::size_t kHeaderPrefix = sizeof kMagic + sizeof(std::uint32_t);
+
+// One record of a trace file: where it starts, its tag (1 frame, 0 end;
+// the header has none) and its body.
+struct Record {
+  std::size_t at = 0;
+  std::uint8_t tag = 0;
+  std::string_view body;
+};
+
+// "the header (byte 0)", "record 12 (byte 3456)": records are numbered
+// from the header's 0 by their place in the file, which a damaged tag or
+// size does not change.
+std::string RecordName(std::size_t index, std::size_t at) {
+  return (index == 0 ? std::string("the header") : "record " + std::to_string(index)) + " (byte " +
+         std::to_string(at) + ")";
+}
+
+// Splits `bytes` (magic and version already checked) into its records up
+// to the end record, checking each one's CRC-32. Throws core::UsageError
+// naming `path` and the first record that is cut short or fails its CRC.
+std::vector<Record> SplitRecords(std::string_view bytes, const std::string& path) {
+  std::vector<Record> records;
+  std::size_t at = 0;
+  while (records.empty() || records.back().tag == 1) {
+    const bool header = records.empty();
+    const std::size_t prefix = header ? kHeaderPrefix : 1;
+    const std::uint8_t tag = header ? 1 : static_cast<std::uint8_t>(bytes[at]);
+    const std::string name = RecordName(records.size(), at);
+    if (!header && tag > 1)
+      throw core::UsageError(path + ": a corrupt sensing trace: " + name +
+                             " is of no known kind; remove it to sense again");
+    std::uint32_t size = 0;
+    const auto cut = [&](std::size_t need) {
+      if (bytes.size() - at < need)
+        throw core::UsageError(path + ": a sensing trace cut short in " + name +
+                               " (or that record's size is corrupt); remove it to sense again");
+    };
+    cut(prefix + sizeof size);
+    std::memcpy(&size, bytes.data() + at + prefix, sizeof size);
+    const std::size_t body_at = at + prefix + sizeof size;
+    cut(prefix + sizeof size + std::size_t{size} + sizeof(std::uint32_t));
+    std::uint32_t crc = 0;
+    std::memcpy(&crc, bytes.data() + body_at + size, sizeof crc);
+    if (Crc32(bytes.substr(at, body_at + size - at)) != crc)
+      throw core::UsageError(path + ": a corrupt sensing trace: " + name +
+                             " fails its CRC-32; remove it to sense again");
+    records.push_back({at, tag, bytes.substr(body_at, size)});
+    at = body_at + size + sizeof crc;
+  }
+  if (bytes.size() - at != kDigestChars)
+    throw core::UsageError(path +
+                           ": a corrupt sensing trace: " + std::to_string(bytes.size() - at) +
+                           " bytes after the end record where its 64-digit SHA-256 belongs; "
+                           "remove it to sense again");
+  return records;
+}
+
+// A frame record's body.
+TracedFrame GetFrame(In& in, std::size_t nodes, const std::string& what, std::uint32_t* node) {
+  *node = in.Get<std::uint32_t>();
+  if (*node >= nodes) throw core::UsageError(what + " is of an unknown node");
+  TracedFrame f;
+  f.t = in.Get<std::int64_t>();
+  f.raw_bytes = in.Get<std::uint64_t>();
+  const auto flags = in.Get<std::uint8_t>();
+  if (flags & kSight) f.sight = TargetSight{(flags & kFrameSaw) != 0, (flags & kSentHolds) != 0};
+  if (flags & kCamera)
+    f.content.camera = GetCamera(in);
+  else
+    f.content.points = GetPoints(in);
+  f.content.latent = in.Floats();
+  const auto further = in.Get<std::uint32_t>();
+  // Each further observation takes more than one byte: a count beyond the
+  // record's size is malformed, not an allocation.
+  if (further > in.Left()) in.Malformed();
+  f.content.further.resize(further);
+  for (NodeObservation& o : f.content.further) {
+    if (in.Get<std::uint8_t>() & kCamera)
+      o.camera = GetCamera(in);
+    else
+      o.points = GetPoints(in);
+    o.latent = in.Floats();
+  }
+  return f;
 }
 
 std::vector<std::string> NodeIds(const Scenario& s) {
@@ -198,8 +313,8 @@ SensingTraceWriter::SensingTraceWriter(std::string key, const Scenario& s)
     : key_(std::move(key)), node_ids_(NodeIds(s)) {}
 
 void SensingTraceWriter::Add(std::uint32_t node, const TracedFrame& f) {
-  Out o(bytes_);
-  o.Put(std::uint8_t{1});
+  std::string body;
+  Out o(body);
   o.Put(node);
   o.Put(static_cast<std::int64_t>(f.t));
   o.Put(f.raw_bytes);
@@ -223,75 +338,86 @@ void SensingTraceWriter::Add(std::uint32_t node, const TracedFrame& f) {
       PutPoints(o, *further.points);
     o.Floats(further.latent);
   }
+  PutRecord(bytes_, std::string_view("\1", 1), body);
   ++frames_;
 }
 
 void SensingTraceWriter::Write(const std::string& dir) const {
-  std::string file(kMagic, sizeof kMagic);
-  Out o(file);
-  o.Put(kSensingTraceVersion);
-  o.Str(key_);
-  o.Put(static_cast<std::uint32_t>(node_ids_.size()));
-  for (const std::string& id : node_ids_) o.Str(id);
+  std::string header;
+  Out h(header);
+  h.Str(key_);
+  h.Put(static_cast<std::uint32_t>(node_ids_.size()));
+  for (const std::string& id : node_ids_) h.Str(id);
+  std::string prefix(kMagic, sizeof kMagic);
+  Out(prefix).Put(kSensingTraceVersion);
+  std::string file;
+  PutRecord(file, prefix, header);
   file += bytes_;
-  o.Put(std::uint8_t{0});
-  o.Put(frames_);
+  std::string end;
+  Out(end).Put(frames_);
+  PutRecord(file, std::string_view("\0", 1), end);
+  file += core::Sha256Hex(file);
   std::error_code ec;
   fs::create_directories(dir, ec);
   core::WriteFileAtomic(SensingTracePath(dir, key_), file);
 }
 
+TracedFrames ParseSensingTrace(const std::string& bytes, const std::string& path,
+                               const std::string& key, const std::vector<std::string>& node_ids) {
+  if (bytes.size() < sizeof kMagic || std::memcmp(bytes.data(), kMagic, sizeof kMagic) != 0)
+    throw core::UsageError(path + ": not a uavsim sensing trace");
+  if (bytes.size() < kHeaderPrefix)
+    throw core::UsageError(path + ": a sensing trace cut short in the header (byte 0)");
+  std::uint32_t version = 0;
+  std::memcpy(&version, bytes.data() + sizeof kMagic, sizeof version);
+  if (version != kSensingTraceVersion)
+    throw core::UsageError(path + ": a sensing trace of format version " + std::to_string(version) +
+                           "; this uavsim reads version " + std::to_string(kSensingTraceVersion) +
+                           " (remove it to sense again)");
+  const std::vector<Record> records = SplitRecords(bytes, path);
+  const std::size_t digest_at = bytes.size() - kDigestChars;
+  if (core::Sha256Hex(bytes.substr(0, digest_at)) != bytes.substr(digest_at))
+    throw core::UsageError(path +
+                           ": a corrupt sensing trace: its SHA-256 digest does not match its "
+                           "bytes (every record's CRC-32 holds: the digest itself is damaged); "
+                           "remove it to sense again");
+  // Every byte checked: now read.
+  const std::string header_name = path + ": the header of the sensing trace";
+  In header(records.front().body, header_name);
+  if (header.Str() != key)
+    throw core::UsageError(path + ": a sensing trace of another sensing key");
+  if (header.Get<std::uint32_t>() != node_ids.size() ||
+      [&] {
+        for (const std::string& id : node_ids)
+          if (header.Str() != id) return true;
+        return false;
+      }() ||
+      !header.AtEnd())
+    throw core::UsageError(path + ": a sensing trace of other nodes");
+  TracedFrames frames(node_ids.size());
+  for (std::size_t i = 1; i + 1 < records.size(); ++i) {
+    const std::string what = path + ": " + RecordName(i, records[i].at) + " of the sensing trace";
+    In in(records[i].body, what);
+    std::uint32_t node = 0;
+    TracedFrame f = GetFrame(in, frames.size(), what, &node);
+    if (!in.AtEnd()) in.Malformed();
+    frames[node].push_back(std::move(f));
+  }
+  const std::string end_name = path + ": the end record of the sensing trace";
+  In end(records.back().body, end_name);
+  if (end.Get<std::uint64_t>() != records.size() - 2 || !end.AtEnd())
+    throw core::UsageError(path + ": a sensing trace whose frame count does not match");
+  return frames;
+}
+
 SensingTraceReader::SensingTraceReader(const std::string& dir, const std::string& key,
                                        const Scenario& s)
-    : path_(SensingTracePath(dir, key)), frames_(s.nodes.size()) {
+    : path_(SensingTracePath(dir, key)) {
   std::error_code ec;
   if (!fs::is_regular_file(path_, ec))
     throw core::UsageError(path_ + ": no sensing trace for this scenario's sensing (key " +
                            key.substr(0, 16) + "...); write one with --trace " + dir);
-  const std::string bytes = core::ReadFileBytes(path_);
-  In in(bytes, path_);
-  if (bytes.size() < sizeof kMagic || std::memcmp(bytes.data(), kMagic, sizeof kMagic) != 0)
-    throw core::UsageError(path_ + ": not a uavsim sensing trace");
-  for (std::size_t i = 0; i < sizeof kMagic; ++i) in.Get<char>();
-  const auto version = in.Get<std::uint32_t>();
-  if (version != kSensingTraceVersion)
-    throw core::UsageError(path_ + ": a sensing trace of format version " +
-                           std::to_string(version) + "; this uavsim reads version " +
-                           std::to_string(kSensingTraceVersion) + " (remove it to sense again)");
-  if (in.Str() != key) throw core::UsageError(path_ + ": a sensing trace of another sensing key");
-  if (in.Get<std::uint32_t>() != s.nodes.size() || [&] {
-        for (const std::string& id : NodeIds(s))
-          if (in.Str() != id) return true;
-        return false;
-      }())
-    throw core::UsageError(path_ + ": a sensing trace of other nodes");
-  std::uint64_t count = 0;
-  while (in.Get<std::uint8_t>() == 1) {
-    const auto node = in.Get<std::uint32_t>();
-    if (node >= frames_.size()) throw core::UsageError(path_ + ": a frame of an unknown node");
-    TracedFrame f;
-    f.t = in.Get<std::int64_t>();
-    f.raw_bytes = in.Get<std::uint64_t>();
-    const auto flags = in.Get<std::uint8_t>();
-    if (flags & kSight) f.sight = TargetSight{(flags & kFrameSaw) != 0, (flags & kSentHolds) != 0};
-    if (flags & kCamera)
-      f.content.camera = GetCamera(in);
-    else
-      f.content.points = GetPoints(in);
-    f.content.latent = in.Floats();
-    f.content.further.resize(in.Get<std::uint32_t>());
-    for (NodeObservation& further : f.content.further) {
-      if (in.Get<std::uint8_t>() & kCamera)
-        further.camera = GetCamera(in);
-      else
-        further.points = GetPoints(in);
-      further.latent = in.Floats();
-    }
-    frames_[node].push_back(std::move(f));
-    ++count;
-  }
-  if (in.Get<std::uint64_t>() != count || !in.AtEnd())
-    throw core::UsageError(path_ + ": a sensing trace whose frame count does not match");
+  frames_ = ParseSensingTrace(core::ReadFileBytes(path_), path_, key, NodeIds(s));
 }
 
 TracedFrame SensingTraceReader::Take(std::uint32_t node, core::SimTime t) {

@@ -19,16 +19,23 @@
 // in it whole: rain changes the sensors as well as the links.
 //
 // File DIR/<key>.trace, little-endian, written all at once at the end of a
-// run (core/atomic_file.h):
-//   "UAVSIMTRACE\0" | u32 version | str key | u32 nodes | str id per node |
-//   frames: u8 1 | u32 node | i64 t_ns | u64 raw_bytes | u8 flags |
+// run (core/atomic_file.h), as records that each carry a CRC-32 (zlib's)
+// over their own bytes, and a SHA-256 over the whole file, written last:
+//   header: "UAVSIMTRACE\0" | u32 version | u32 size | str key | u32 nodes |
+//           str id per node | u32 crc
+//   frame:  u8 1 | u32 size | u32 node | i64 t_ns | u64 raw_bytes | u8 flags |
 //           observation | u32 n | f32 latent[n] |
 //           u32 further | per further observation: u8 flags | observation |
-//           u32 n | f32 latent[n]
-//   end:    u8 0 | u64 frame count
-// (str: u32 length and bytes; flags: 1 sight, 2 frame saw the target,
-// 4 what was sent holds it, 8 a camera observation; the camera observation
-// without its crops, which never travel).
+//           u32 n | f32 latent[n] | u32 crc
+//   end:    u8 0 | u32 size | u64 frame count | u32 crc
+//   digest: 64 hex digits, the SHA-256 of every byte before them
+// (size: the bytes between it and the crc; crc: over the record's bytes
+// before it; str: u32 length and bytes; flags: 1 sight, 2 frame saw the
+// target, 4 what was sent holds it, 8 a camera observation; the camera
+// observation without its crops, which never travel). A replay uses no
+// byte before every record's CRC and the digest have been checked: a
+// trace copied between machines or damaged on disk is refused, naming its
+// first bad record, never replayed.
 #pragma once
 
 #include <cstdint>
@@ -38,12 +45,12 @@
 #include <vector>
 
 #include "core/time.h"
+#include "sim/node_content.h"
 #include "sim/scenario.h"
-#include "sim/sensing_node.h"
 
 namespace uavsim::sim {
 
-inline constexpr std::uint32_t kSensingTraceVersion = 2;
+inline constexpr std::uint32_t kSensingTraceVersion = 3;
 
 // One frame as its node sent it: the frame's time, its raw size, the
 // simulator's ground truth about it and the content (latent included,
@@ -80,12 +87,25 @@ class SensingTraceWriter {
   std::uint64_t frames_ = 0;
 };
 
-// A trace file read back, each node's frames in send order.
+// Each node's frames in send order.
+using TracedFrames = std::vector<std::deque<TracedFrame>>;
+
+// Checks and reads the bytes of a trace file (`path` names it in errors)
+// that should hold `key`'s sensing by nodes `node_ids`. Throws
+// core::UsageError naming `path` when it is not a trace, of another format
+// version, for another key or node list, cut short, or corrupt: a record
+// whose CRC-32 fails (named by its place: "the header", "record N", the
+// frames from 1 and the end record last, and its first byte),
+// a digest that does not match, a record whose content is malformed.
+// Never reads outside `bytes`.
+TracedFrames ParseSensingTrace(const std::string& bytes, const std::string& path,
+                               const std::string& key, const std::vector<std::string>& node_ids);
+
+// A trace file read back.
 class SensingTraceReader {
  public:
-  // Reads DIR/<key>.trace. Throws core::UsageError naming the file when
-  // it is missing, of another format version, for another key or node
-  // list, or cut short.
+  // Reads DIR/<key>.trace (ParseSensingTrace). Throws core::UsageError
+  // naming the file when it is missing or refused.
   SensingTraceReader(const std::string& dir, const std::string& key, const Scenario& s);
   // Node `node`'s next frame, which must be at time t (else
   // std::runtime_error naming the file: the trace does not fit the run).
@@ -94,7 +114,7 @@ class SensingTraceReader {
 
  private:
   std::string path_;
-  std::vector<std::deque<TracedFrame>> frames_;
+  TracedFrames frames_;
 };
 
 }  // namespace uavsim::sim

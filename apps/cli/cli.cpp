@@ -5,9 +5,11 @@
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
+#include <new>
 #include <sstream>
 
 #include "core/error.h"
+#include "core/interrupt.h"
 #include "sim/version.h"
 
 namespace uavsim::cli {
@@ -177,6 +179,35 @@ int RunCommandLine(int argc, char** argv) {
     return c.run(a, argc, argv);
   }
   throw UsageError("uavsim: unknown command '" + cmd + "' (see uavsim --help)");
+}
+
+int RunMain(int argc, char** argv, std::string (*details)(const std::exception&)) {
+  try {
+    core::InstallInterruptHandlers();  // again: a library's initialiser may have reset them
+    core::ThrowIfInterrupted();        // a request during the libraries' initialisers
+    const int rc = RunCommandLine(argc, argv);
+    // A request the command did not poll for (it came during its last
+    // steps): answered like any other.
+    core::ThrowIfInterrupted();
+    return rc;
+  } catch (const core::ConfigError& e) {
+    std::cerr << e.what() << "\n";
+    return kExitBadInput;
+  } catch (const UsageError& e) {
+    std::cerr << e.what() << "\n";
+    return kExitBadInput;
+  } catch (const core::Interrupted&) {
+    std::cerr << "uavsim: interrupted; nothing half-written is left under a final name\n";
+    return kExitInterrupted;
+  } catch (const std::bad_alloc&) {
+    std::cerr << "uavsim: out of memory\n";
+    return kExitFailure;
+  } catch (const std::exception& e) {
+    std::cerr << "uavsim: " << e.what() << "\n";
+    if (const std::string more = details ? details(e) : ""; !more.empty())
+      std::cerr << more << "\n";
+    return kExitFailure;
+  }
 }
 
 }  // namespace uavsim::cli

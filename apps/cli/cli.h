@@ -4,6 +4,7 @@
 // turns them into one line on stderr and exit code 2.
 #pragma once
 
+#include <exception>
 #include <map>
 #include <optional>
 #include <set>
@@ -56,6 +57,11 @@ struct Command {
 // says. main() and the Python module (apps/python) call it.
 int RunCommandLine(int argc, char** argv);
 
+// A program's main(): RunCommandLine, with bad input, an interruption or a
+// failure turned into its one line on stderr and its exit code (2, 130, 1).
+// `details`: further lines for a failure (a traceback), or "".
+int RunMain(int argc, char** argv, std::string (*details)(const std::exception&) = nullptr);
+
 // The commands, in the order `uavsim --help` lists them.
 const std::vector<Command>& Commands();
 
@@ -84,7 +90,7 @@ std::string Duration(double s);
 // after its line (main() prints it).
 bool& Verbose();
 
-// The commands' rows (apps/cli/<name>.cpp).
+// The commands' rows (apps/cli/<name>_command.cpp: usage, options, help).
 Command ValidateCommand();
 Command RunCommand();
 Command SweepCommand();
@@ -93,5 +99,23 @@ Command DatasetCommand();
 Command ReproduceCommand();
 Command ReportCommand();
 Command BenchCommand();
+
+// The commands' bodies (apps/cli/<name>.cpp), which the rows run. Two
+// programs define them: uavsim-main (and the Python module) runs every one;
+// uavsim-light, which loads no LibTorch, runs validate and report and hands
+// the others, and a validate that must load a model, to uavsim-main in its
+// place (apps/cli/light_main.cpp; the launcher picks the program).
+int RunValidateCommand(const ParsedArgs& a, int argc, char** argv);
+int RunRunCommand(const ParsedArgs& a, int argc, char** argv);
+int RunSweepCommand(const ParsedArgs& a, int argc, char** argv);
+int RunTrainCommand(const ParsedArgs& a, int argc, char** argv);
+int RunDatasetCommand(const ParsedArgs& a, int argc, char** argv);
+int RunReproduceCommand(const ParsedArgs& a, int argc, char** argv);
+int RunReportCommand(const ParsedArgs& a, int argc, char** argv);
+int RunBenchCommand(const ParsedArgs& a, int argc, char** argv);
+
+// train's flags that the training config replaced, refused by name
+// (train_command.cpp).
+void RefuseReplacedTrainFlags(const ParsedArgs& a);
 
 }  // namespace uavsim::cli

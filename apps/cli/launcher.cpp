@@ -1,13 +1,14 @@
 // The `uavsim` command as it is started: it blocks SIGINT and SIGTERM, then
-// runs the program proper, `uavsim-main` beside it, in its place (the same
-// process, arguments and environment). Loading the program proper takes
-// the dynamic loader a while (LibTorch's relocations: 0.1 s on an idle
-// machine, 0.8 s on a loaded one), before any of its code can install a
-// handler; a signal in that time would end it by the default action (exit
-// 143, no message). Blocked, the signal waits, and the program proper
-// answers it as documented once its handlers are in (apps/cli/main.cpp). This
-// file uses the C library only, so that its own start costs next to
-// nothing.
+// runs the command line, `uavsim-light` beside it, in its place (the same
+// process, arguments and environment), which runs uavsim-main in its place
+// in turn for a command that needs LibTorch (apps/cli/cli.h). Loading a
+// program takes the dynamic loader a while (uavsim-main's LibTorch
+// relocations: 0.1 s on an idle machine, 0.8 s on a loaded one), before any
+// of its code can install a handler; a signal in that time would end it by
+// the default action (exit 143, no message). Blocked, the signal waits, and
+// the program answers it as documented once its handlers are in
+// (apps/cli/light_main.cpp, main.cpp). This file uses the C library only, so
+// that its own start costs next to nothing.
 #include <errno.h>
 #include <limits.h>
 #include <signal.h>
@@ -21,7 +22,7 @@ int main(int, char** argv) {
   sigaddset(&termination, SIGINT);
   sigaddset(&termination, SIGTERM);
   sigprocmask(SIG_BLOCK, &termination, nullptr);
-  static const char kSuffix[] = "-main";
+  static const char kSuffix[] = "-light";
   char path[PATH_MAX];
   const ssize_t n = readlink("/proc/self/exe", path, sizeof path - sizeof kSuffix);
   if (n <= 0) {

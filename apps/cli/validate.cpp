@@ -1,37 +1,17 @@
-// `uavsim validate`: checks scenarios strictly and says what a run of each
-// would cost here.
+#include "apps/cli/validate.h"
+
 #include <cstdio>
 #include <iostream>
 
-#include "apps/cli/cli.h"
 #include "core/error.h"
-#include "sim/edge_server.h"
 #include "sim/run_cost.h"
 #include "sim/scenario.h"
 
 namespace uavsim::cli {
-namespace {
 
 using core::UsageError;
 
-const char* kHelp =
-    "usage: uavsim validate SCENARIO.json [MORE.json]... [--set /json/pointer=value]...\n"
-    "                       [--record camera,lidar,radar,mcap] [--resolved] [--quiet]\n"
-    "\n"
-    "Checks each SCENARIO.json strictly (unknown keys, types, ranges, references, files,\n"
-    "meshes, the trained model's manifest and checksums, resource limits: rays and\n"
-    "memory against this machine's). Exit 0 if all are valid, else exit 2 with one line\n"
-    "on stderr per invalid file:\n"
-    "  FILE: /json/pointer: expected ..., got ...\n"
-    "\n"
-    "  --set P=V     override the value at JSON pointer P (V is JSON, or a bare string),\n"
-    "                in every file\n"
-    "  --resolved    print the scenario with every default filled, as JSON, on stdout\n"
-    "                (one file only)\n"
-    "  --record LIST also say how many bytes `run --record LIST` would write at most\n"
-    "  --quiet       print nothing on success\n";
-
-int Validate(const ParsedArgs& a, int, char**) {
+int ValidateScenarios(const ParsedArgs& a, const ModelCheck& check_models) {
   if (a.positional.empty())
     throw UsageError("uavsim validate: expected a scenario file (see uavsim validate --help)");
   if (a.Has("--resolved") && a.positional.size() != 1)
@@ -43,7 +23,7 @@ int Validate(const ParsedArgs& a, int, char**) {
   for (const std::string& file : a.positional) {
     try {
       const sim::Scenario s = sim::LoadScenario(file, Overrides(a));
-      sim::CheckTrainedModel(s, file, a.Has("--quiet"));
+      check_models(s, file, a.Has("--quiet"));
       if (a.Has("--resolved")) std::cout << sim::ResolvedJson(s).dump(2) << "\n";
       if (!a.Has("--quiet") && !a.Has("--resolved")) {
         const auto e = sim::EstimateResources(s);
@@ -65,19 +45,6 @@ int Validate(const ParsedArgs& a, int, char**) {
     }
   }
   return exit_code;
-}
-
-std::string Help() { return kHelp; }
-
-}  // namespace
-
-Command ValidateCommand() {
-  return {"validate",
-          "validate SCENARIO.json",
-          "check a scenario; exit 0, or exit 2 with FILE: /json/pointer: message",
-          {{"--set", true}, {"--record", true}, {"--resolved", false}},
-          Help,
-          Validate};
 }
 
 }  // namespace uavsim::cli

@@ -13,11 +13,29 @@ using namespace uavsim;
 
 namespace {
 
+// C++ text as Python's. Bytes that are not UTF-8 become U+FFFD: a strict
+// decoding would raise UnicodeDecodeError in place of the error.
+py::str Text(const std::string& s) {
+  PyObject* text = PyUnicode_DecodeUTF8(s.data(), static_cast<Py_ssize_t>(s.size()), "replace");
+  if (!text) throw py::error_already_set();
+  return py::reinterpret_steal<py::str>(text);
+}
+
+// The message as the error's line shows it (one line of UTF-8, control
+// characters and bytes that are not UTF-8 escaped: core/error.cpp), so that
+// it is part of str(e): the line past that of the same error without one.
+std::string ShownMessage(const core::ConfigError& e) {
+  const core::ConfigError bare = e.about_document() ? core::ConfigError::AboutDocument(e.file(), "")
+                                                    : core::ConfigError(e.file(), e.pointer(), "");
+  const std::string line = e.what(), prefix = bare.what();
+  return line.compare(0, prefix.size(), prefix) == 0 ? line.substr(prefix.size()) : e.message();
+}
+
 // Sets uavsim.ScenarioError(line, file, pointer, message) (uavsim/_errors.py).
 void SetScenarioError(py::object file, py::object pointer, const std::string& message,
                       const std::string& line) {
   const py::object cls = py::module_::import("uavsim._errors").attr("ScenarioError");
-  const py::object error = cls(line, file, pointer, message);
+  const py::object error = cls(Text(line), file, pointer, Text(message));
   PyErr_SetObject(cls.ptr(), error.ptr());
 }
 
@@ -25,7 +43,7 @@ void Translate(std::exception_ptr p) {
   try {
     if (p) std::rethrow_exception(p);
   } catch (const core::ConfigError& e) {
-    SetScenarioError(py::str(e.file()), py::str(e.pointer()), e.message(), e.what());
+    SetScenarioError(Text(e.file()), Text(e.pointer()), ShownMessage(e), e.what());
   } catch (const core::UsageError& e) {
     SetScenarioError(py::none(), py::none(), e.what(), e.what());
   } catch (const core::Interrupted&) {

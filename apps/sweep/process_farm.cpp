@@ -25,6 +25,7 @@
 #include <thread>
 
 #include "core/atomic_file.h"
+#include "core/child_process.h"
 #include "core/progress.h"
 #include "sim/run.h"
 
@@ -54,10 +55,12 @@ int ThreadsPerTask(int jobs) { return std::max(1, CoresAvailable() / (LocalRanks
 // (LibTorch runs on one thread in every run), and exits.
 pid_t LaunchTask(const ProcessFarm& farm, std::size_t task, const std::string& dir, int threads) {
   std::fflush(nullptr);
+  const pid_t parent = ::getpid();
   const pid_t pid = ::fork();
   if (pid < 0)
     throw std::runtime_error(farm.command + ": cannot start a task: fork: " + std::strerror(errno));
   if (pid > 0) return pid;
+  core::DieWithParent(parent);  // a killed command takes its tasks with it
   int rc = 0;
   try {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism,

@@ -1,5 +1,7 @@
 // Independent tasks 0..n-1 run in child processes (fork, no exec): a crash
-// or a kill costs one task, and each task gets its own cores. Sweeps run
+// or a kill costs one task, and each task gets its own cores. A task's
+// process dies with the farm's (core/child_process.h): a command killed by
+// any signal, SIGKILL included, leaves no task running or writing. Sweeps run
 // their points this way, training its episodes.
 //
 //  - on one machine: `jobs` tasks at a time; a terminal shows tasks done,

@@ -57,6 +57,14 @@ TEST_CASE("JsonIo: the reader names the pointer, the rule and the value", "[core
         "w.json: /weather/rain_mm_h: expected a number in [0, 300], got -1");
   CHECK(load(R"({"rain_mm_h": "heavy"})") ==
         "w.json: /weather/rain_mm_h: expected a number in [0, 300], got \"heavy\"");
+  // A long string is cut on a character's first byte: the line stays UTF-8.
+  std::string long_text;
+  for (int i = 0; i < 70; ++i) long_text += "\xc3\xa9";  // é
+  const std::string cut = load(("{\"rain_mm_h\": \"" + long_text + "\"}").c_str());
+  CHECK(cut.find("...\"") != std::string::npos);
+  const std::string shown = cut.substr(cut.find("got \"") + 5);
+  CHECK(shown.size() % 2 == 0);  // "é" pairs up to the 4 bytes of '..."'
+  CHECK(shown.rfind("\xc3\xa9...\"") == shown.size() - 6);
   CHECK(ConfigErrorOf([] { ParseJsonText(R"({"weather": {"rain_mm_h": 1e999}})", "w.json"); }) ==
         "w.json: /weather/rain_mm_h: expected a finite number, got 1e999 (out of range)");
   CHECK(ConfigErrorOf([] { ParseJsonText(R"({"p": [1, 2, -1e400]})", "w.json"); }) ==

@@ -1,5 +1,6 @@
 """uavsim.run against `uavsim run`, and Python methods in the loop."""
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -86,6 +87,53 @@ def test_a_method_that_returns_nonsense_is_an_error(tmp_path):
     with pytest.raises(TypeError, match="expected 3 numbers"):
         uavsim.run(DEFAULT, duration=1, quiet=True,
                    methods=[uavsim.PythonMethod("two", lambda *a: [1.0, 2.0])])
+
+
+class Opaque:
+    def __repr__(self):
+        return "Opaque(" + "x" * 200 + ")"
+
+
+# One bad return value per kind: (value, exception, how the message shows it, why it is bad).
+BAD_RETURNS = {
+    "str": ("abc", TypeError, "str 'abc'", "not numbers"),
+    "bytes": (b"1.0", TypeError, "bytes b'1.0'", "not numbers"),
+    "wrong_length": ([1.0, 2.0], TypeError, "list [1.0, 2.0]", "2 values"),
+    "dict": ({"x": 1, "y": 2, "z": 3}, TypeError, "dict {'x': 1, 'y': 2, 'z': 3}", "not numbers"),
+    "object": (Opaque(), TypeError, "Opaque Opaque(" + "x" * 50 + "...", "not numbers"),
+    "strings": (["1", "2", "3"], TypeError, "list ['1', '2', '3']", "not numbers"),
+    "ragged": ([[1.0, 2.0], [3.0]], TypeError, "list [[1.0, 2.0], [3.0]]", "not numbers"),
+    "none_inside": ([1.0, None, 3.0], TypeError, "list [1.0, None, 3.0]", "not numbers"),
+    "nan": ([0.0, float("nan"), 0.0], ValueError, "list [0.0, nan, 0.0]", "not finite"),
+    "inf": (np.array([np.inf, 0, 0], dtype=np.float32), ValueError,
+            "numpy.ndarray array([inf, 0., 0.], dtype=float32)", "not finite"),
+}
+
+
+@pytest.mark.parametrize("kind", BAD_RETURNS)
+def test_a_bad_return_value_names_the_method_and_the_window(tmp_path, kind):
+    value, error, shown, why = BAD_RETURNS[kind]
+    with pytest.raises(error) as e:
+        uavsim.run(DEFAULT, duration=1, out=str(tmp_path / "r"), quiet=True,
+                   methods=["ekf", uavsim.PythonMethod("bad", lambda *a: value)])
+    message = str(e.value)
+    assert type(e.value) is error, message
+    assert re.fullmatch(re.escape('PythonMethod "bad" returned %s at window ' % shown) + r"\d+" +
+                        re.escape(": %s; expected 3 numbers (x, y, z: world ENU metres) or None" % why),
+                        message), message
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_three_numbers_in_any_shape_are_a_position():
+    answers = [(1, 2, 3), np.array([[1.0], [2.0], [3.0]], dtype=np.float16), [[np.int8(1), 2, 3.5]]]
+    calls = []
+
+    def fn(*args):
+        calls.append(1)
+        return answers[(len(calls) - 1) % len(answers)]
+
+    run = uavsim.run(DEFAULT, duration=1, quiet=True, methods=[uavsim.PythonMethod("shapes", fn)])
+    assert len(run.estimates["shapes"]) == len(calls) >= len(answers)
 
 
 def test_ctrl_c_stops_a_run_and_leaves_nothing(tmp_path):

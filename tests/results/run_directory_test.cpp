@@ -1,10 +1,13 @@
 #include "results/run_directory.h"
 
+#include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <catch2/catch.hpp>
 #include <filesystem>
+#include <fstream>
+#include <string>
 
 #include "results/csv.h"
 #include "test_support.h"
@@ -102,6 +105,42 @@ TEST_CASE("RunDirectory: staging folders of dead processes are removed, live one
   CHECK(uavsim::results::RemoveStaleStaging(dir + "/third") == 1);
   CHECK_FALSE(fs::exists(other));
   CHECK(fs::exists(live));
+}
+
+TEST_CASE("RunDirectory: a zombie's staging folder and temporaries are stale at once",
+          "[results]") {
+  // A process killed a moment ago stays a zombie until its parent waits for
+  // it (a shell, a scheduler or a Python parent may take seconds): it runs
+  // nothing and writes nothing, so the next command removes what it left.
+  const std::string dir = uavsim::testing::TempDir("zombie");
+  const pid_t child = fork();
+  if (child == 0) _exit(0);
+  // Until its /proc entry says it has ended (not reaped: kill() still finds it).
+  const auto state = [child] {
+    std::ifstream stat("/proc/" + std::to_string(child) + "/stat");
+    std::string line;
+    std::getline(stat, line);
+    const auto paren = line.rfind(')');
+    return paren == std::string::npos || paren + 2 >= line.size() ? '?' : line[paren + 2];
+  };
+  for (int i = 0; i < 500 && state() != 'Z'; ++i) usleep(2000);
+  REQUIRE(state() == 'Z');
+  CHECK(kill(child, 0) == 0);
+  CHECK_FALSE(uavsim::results::ProcessAlive(child));
+  CHECK_FALSE(uavsim::results::ProcessAlive(0));  // not a process's number
+  CHECK_FALSE(uavsim::results::ProcessAlive(-1));
+  const std::string staged = dir + "/.run.partial-" + std::to_string(child);
+  const std::string temporary = dir + "/x.csv.tmp-" + std::to_string(child);
+  fs::create_directories(staged + "/sub");
+  uavsim::testing::WriteFile(temporary, "half");
+  {
+    RunDirectory run(dir + "/run", false);
+    CHECK_FALSE(fs::exists(staged));
+  }
+  CHECK(uavsim::results::RemoveStaleTemporaries(dir) == 1);
+  CHECK_FALSE(fs::exists(temporary));
+  int status = 0;
+  waitpid(child, &status, 0);
 }
 
 TEST_CASE("RemoveStaleTemporaries: the temporary files of dead processes go, the rest stay",

@@ -11,10 +11,12 @@ class PythonMethod:
                  frame f in capture order, the node's IB-CC latent
       offsets_s  float32 [L, 3, F]: capture time minus the window's start (s)
       mask       float32 [L, 3, F]: 1 for a frame, 0 for padding
-      returns    3 numbers (world ENU metres, the target at the window's end)
-                 or None (no estimate this window); a non-finite value, or
-                 one more than 1 km outside the scenario's bounds, counts as
-                 no estimate (metrics.json's rejected_estimates)
+      returns    3 finite numbers (world ENU metres, the target at the
+                 window's end) or None (no estimate this window); one more
+                 than 1 km outside the scenario's bounds counts as no
+                 estimate (metrics.json's rejected_estimates). Anything else
+                 stops the run: TypeError (not 3 numbers) or ValueError (not
+                 finite), naming the method and the window.
     L is history_windows. With window_time=True (our addition to the
     TorchScript contract) it is called fn(latents, offsets_s, mask, t_end_s),
     t_end_s the window's end (s of simulated time). The function is not called before the first

@@ -4,6 +4,7 @@ import json
 import os
 
 from . import _uavsim
+from ._errors import ScenarioError
 
 
 class Scenario:
@@ -35,8 +36,11 @@ class Scenario:
 
     def set(self, pointer, value):
         """Sets the value at a JSON pointer, as `--set POINTER=VALUE` does; returns self."""
-        if not isinstance(pointer, str) or not pointer.startswith("/"):
-            raise ValueError("a JSON pointer starts with '/', got %r" % (pointer,))
+        # As the command line refuses it (exit 2); text that is not UTF-8 (a
+        # lone surrogate) would not reach the engine.
+        if not isinstance(pointer, str) or not pointer.startswith("/") or not _is_utf8(pointer):
+            message = "--set %r: expected a JSON pointer (UTF-8 text starting with /)" % (pointer,)
+            raise ScenarioError("%s: %s" % (self.file, message), self.file, "", message)
         self._overrides.append(pointer + "=" + json.dumps(value))
         return self
 
@@ -66,6 +70,14 @@ class Scenario:
     def __repr__(self):
         return "Scenario(%r%s)" % (self.path if self.path else "<dict>",
                                    ", %d overrides" % len(self._overrides) if self._overrides else "")
+
+
+def _is_utf8(text):
+    try:
+        text.encode("utf-8")
+        return True
+    except UnicodeEncodeError:
+        return False
 
 
 def load(source):

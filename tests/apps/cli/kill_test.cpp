@@ -9,7 +9,10 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <map>
 #include <random>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -21,6 +24,7 @@ using uavsim::testing::Background;
 using uavsim::testing::ReadFile;
 using uavsim::testing::RunCli;
 using uavsim::testing::TempDir;
+using uavsim::testing::WriteFile;
 
 namespace {
 const std::string kDefault = std::string(UAVSIM_SOURCE_DIR) + "/scenarios/default.json";
@@ -212,8 +216,8 @@ TEST_CASE("Kill: SIGTERM or SIGINT inside one heavy capture stops the run at onc
 }
 
 namespace {
-// Whether process `pid` is uavsim (the launcher or the program proper it
-// runs) and has taken charge of SIGTERM and SIGINT: it blocks them (the
+// Whether process `pid` is uavsim (the launcher or a program it runs:
+// uavsim-light, uavsim-main) and has taken charge of SIGTERM and SIGINT: it blocks them (the
 // launcher, until the program proper's handlers are in) or catches them
 // (its /proc status's SigBlk or SigCgt mask). Before exec it is still the
 // test's own fork, which catches them with Catch's handlers.
@@ -221,7 +225,9 @@ bool AnswersTermination(pid_t pid) {
   std::error_code ec;
   const fs::path exe = fs::read_symlink("/proc/" + std::to_string(pid) + "/exe", ec);
   const fs::path cli = fs::canonical(UAVSIM_CLI, ec);
-  if (exe != cli && exe.string() != cli.string() + "-main") return false;
+  if (exe != cli && exe.string() != cli.string() + "-main" &&
+      exe.string() != cli.string() + "-light")
+    return false;
   std::ifstream status("/proc/" + std::to_string(pid) + "/status");
   const unsigned long long both = (1ull << (SIGTERM - 1)) | (1ull << (SIGINT - 1));
   for (std::string line; std::getline(status, line);)
@@ -259,4 +265,141 @@ TEST_CASE("Kill: SIGTERM or SIGINT in a command's first second gives 130 and the
     CHECK_FALSE(fs::exists(out));
   }
   CHECK_FALSE(HasStaging(dir));
+}
+
+namespace {
+
+// A process's state and parent and group from /proc/PID/stat (state 0 if
+// it is gone).
+struct ProcStat {
+  char state = 0;
+  pid_t ppid = 0, pgrp = 0;
+};
+
+ProcStat StatOf(const std::string& pid) {
+  std::ifstream stat("/proc/" + pid + "/stat");
+  std::string line;
+  ProcStat s;
+  if (!std::getline(stat, line)) return s;
+  const auto paren = line.rfind(')');
+  if (paren == std::string::npos) return s;
+  std::istringstream rest(line.substr(paren + 1));
+  rest >> s.state >> s.ppid >> s.pgrp;
+  return s;
+}
+
+// The processes that satisfy `match` and have not ended (a zombie has: it
+// runs nothing and writes nothing; only its parent can remove it).
+std::vector<pid_t> LiveProcesses(const std::function<bool(const ProcStat&)>& match) {
+  std::vector<pid_t> live;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator("/proc", ec)) {
+    const std::string name = e.path().filename().string();
+    if (name.find_first_not_of("0123456789") != std::string::npos) continue;
+    const ProcStat s = StatOf(name);
+    if (s.state && s.state != 'Z' && s.state != 'X' && match(s))
+      live.push_back(static_cast<pid_t>(std::stol(name)));
+  }
+  return live;
+}
+
+// Every path under `root` with its size and modification time.
+std::map<std::string, std::pair<std::uintmax_t, fs::file_time_type>> Snapshot(
+    const std::string& root) {
+  std::map<std::string, std::pair<std::uintmax_t, fs::file_time_type>> files;
+  std::error_code ec;
+  for (auto it = fs::recursive_directory_iterator(root, ec);
+       !ec && it != fs::recursive_directory_iterator(); it.increment(ec)) {
+    std::error_code e;
+    const auto size = it->is_regular_file(e) ? it->file_size(e) : 0;
+    files[it->path().string()] = {size, it->last_write_time(e)};
+  }
+  return files;
+}
+
+}  // namespace
+
+TEST_CASE(
+    "Kill: any signal to the PID a user sees stops every process of the command, and nothing "
+    "writes into its folder afterwards",
+    "[sim][kill][slow]") {
+  // A shell's `kill %1`, a scheduler or Python's subprocess.kill() signal
+  // the PID they started, not its process group: the forked sweep points,
+  // episode jobs, trainings and gnuplot must end with it (a sweep point
+  // went on and wrote its trace into the sweep folder after its sweep was
+  // killed). Each kill lands at a moment the work itself reaches.
+  const std::string dir = TempDir("kill-visible");
+  const std::string spec = dir + "/spec.json";
+  WriteFile(spec, R"({"name": "k", "scenario": ")" + kDefault + R"(",
+      "set": {"/duration_s": 2, "/pipeline/methods": ["ekf"]}, "seeds": {"from": 1, "count": 4}})");
+  const std::string model = std::string(UAVSIM_SOURCE_DIR) + "/models/default";
+  struct Case {
+    std::string name;
+    std::vector<std::string> args;
+    int sig;
+    // The moment to signal, given the command's PID and its folder.
+    std::function<bool(pid_t, const std::string&)> moment;
+  };
+  const auto has_children = [](pid_t pid, const std::string&) {
+    return !LiveProcesses([pid](const ProcStat& s) { return s.ppid == pid; }).empty();
+  };
+  const std::vector<Case> cases = {
+      // gnuplot drawing the report's plots into the run's staging folder
+      {"run",
+       {"run", kDefault, "--duration", "1", "--set", "/pipeline/methods=[\"ekf\"]"},
+       SIGKILL,
+       has_children},
+      {"sweep-start", {"sweep", spec, "--jobs", "2"}, SIGKILL, has_children},
+      {"sweep-point-done",
+       {"sweep", spec, "--jobs", "2"},
+       SIGKILL,
+       [&](pid_t pid, const std::string& out) {
+         return fs::exists(out + "/points/p0000") && has_children(pid, out);
+       }},
+      {"sweep-hangup", {"sweep", spec, "--jobs", "2"}, SIGHUP, has_children},
+      {"train",
+       {"train", kDefault, "--quick", "--episodes", "4", "--episode-s", "2", "--jobs", "2"},
+       SIGKILL,
+       has_children},
+      {"dataset",
+       {"dataset", kDefault, "--episodes", "2", "--episode-s", "2", "--jobs", "2", "--model",
+        model},
+       SIGKILL,
+       has_children},
+      // the reproduction's episode sets or trainings
+      {"reproduce",
+       {"reproduce", "--scenario", kDefault, "--quick", "--jobs", "2"},
+       SIGKILL,
+       has_children},
+  };
+  for (const Case& c : cases) {
+    INFO(c.name << ", signal " << c.sig);
+    const std::string root = dir + "/" + c.name;
+    fs::create_directories(root);
+    const std::string out = root + "/out" + (c.args[0] == "dataset" ? ".h5" : "");
+    std::vector<std::string> args = c.args;
+    args.insert(args.end(), {"--out", out, "--quiet"});
+    Background cmd(args, dir + "/" + c.name + "-log");
+    const pid_t pid = cmd.pid();
+    REQUIRE(cmd.WaitFor([&] { return c.moment(pid, out); }));
+    kill(pid, c.sig);  // the PID alone, not its group
+    CHECK(cmd.Wait() == 128 + c.sig);
+    const auto in_group = [pid](const ProcStat& s) { return s.pgrp == pid; };
+    const auto killed = std::chrono::steady_clock::now();
+    while (!LiveProcesses(in_group).empty() &&
+           std::chrono::steady_clock::now() - killed < std::chrono::seconds(1))
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    CHECK(LiveProcesses(in_group).empty());
+    const auto before = Snapshot(root);
+    std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+    CHECK(Snapshot(root) == before);
+    if (c.name == "sweep-start") {
+      // Its lock is free at once (no point of it holds the lock's file) and
+      // the next sweep in the folder removes what the killed one staged.
+      const auto again = RunCli(args);
+      INFO(again.err);
+      CHECK(again.exit_code == 0);
+      CHECK_FALSE(HasStaging(root));
+    }
+  }
 }

@@ -100,8 +100,9 @@ TEST_CASE("Trace: a replayed run equals a full run across links and methods", "[
   CHECK(ReadFile(dir + "/outage-full/estimates.csv") != ReadFile(dir + "/loss-full/estimates.csv"));
 }
 
-TEST_CASE("Trace: a trace of other sensing, another version or cut short is refused",
-          "[sim][slow]") {
+TEST_CASE(
+    "Trace: a trace of other sensing, another version, cut short or with a byte changed is refused",
+    "[sim][slow]") {
   const std::string dir = TempDir("trace-refused");
   const std::string traces = dir + "/traces";
   REQUIRE(Run(dir + "/traced", {"--trace", traces}).exit_code == 0);
@@ -134,6 +135,22 @@ TEST_CASE("Trace: a trace of other sensing, another version or cut short is refu
   r = Run(dir + "/short", {"--replay", traces});
   CHECK(r.exit_code == 2);
   CHECK_THAT(r.err, Catch::Contains(trace) && Catch::Contains("cut short"));
+  // One byte changed anywhere (the header, frames of each node, the end
+  // record, the digest): refused before a byte is used, naming the file
+  // and the first bad record (a changed byte once replayed silently into
+  // other estimates).
+  for (const double at : {0.001, 0.2, 0.35, 0.5, 0.7, 0.9, 0.9995}) {
+    INFO("byte at " << at << " of " << original.size());
+    std::string flipped = original;
+    const auto i = static_cast<std::size_t>(at * static_cast<double>(original.size()));
+    flipped[i] = static_cast<char>(flipped[i] ^ 0x10);
+    WriteFile(trace, flipped);
+    r = Run(dir + "/flipped", {"--replay", traces});
+    CHECK(r.exit_code == 2);
+    CHECK_THAT(r.err, Catch::StartsWith(trace + ": "));
+    CHECK_THAT(r.err, Catch::Contains("corrupt") || Catch::Contains("cut short"));
+    CHECK(!fs::exists(dir + "/flipped"));
+  }
   // Nothing to record in a replay.
   WriteFile(trace, original);
   r = Run(dir + "/record", {"--replay", traces, "--record", "lidar"});
