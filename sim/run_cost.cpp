@@ -15,20 +15,20 @@ namespace {
 
 // The wall-time model: a run's work counted from its scenario (pixels,
 // rays, IF-cube samples, encoder passes, windows) times what each unit of
-// work costs this build, per core, on the project's 2-core reference
-// machine when idle (docs/speed.md "Wall-time model": how each was measured,
-// on scenarios/default.json alone; the other shipped scenarios check it).
-constexpr double kSetupS = 0.6;              // the libraries, the world's BVH, the model
-constexpr double kCameraPerPixelS = 2.6e-8;  // per eye pixel: its ray, shading, pre-processing
-constexpr double kCameraEncodeS = 5.0e-3;    // one pass of the image encoder (two 128 x 128 crops)
-constexpr double kLidarPerRayS = 1.0e-7;     // per beam: its ray, pre-processing and encoder
-constexpr double kRadarPerCubeSampleS = 1.0e-7;  // per IF-cube sample: synthesis, FFTs, CFAR
-constexpr double kPerFrameS = 1.0e-4;            // per frame: slices, message, uplink
-constexpr double kPerMethodWindowS = 1.0e-3;     // per method and alignment window, at the edge
+// work costs this build on the project's 2-core reference machine, each
+// measured by a run of scenarios/default.json's one node alone
+// (docs/speed.md "Wall-time model"); the shipped scenarios check it.
+constexpr double kSetupS = 1.4;              // the libraries, the world's BVH, the model
+constexpr double kCameraPerPixelS = 2.9e-8;  // per eye pixel: its ray, shading, pre-processing
+constexpr double kCameraEncodeS = 2.0e-3;    // one pass of the image encoder (two 128 x 128 crops)
+constexpr double kLidarPerRayS = 1.2e-7;     // per beam: its ray, pre-processing and encoder
+constexpr double kRadarPerCubeSampleS = 4.0e-8;  // per IF-cube sample: synthesis, FFTs, CFAR
+constexpr double kPerMethodWindowS = 8.0e-4;     // per method and alignment window, at the edge
 
-// Seconds of one core a frame of `sensor` costs.
+// Seconds a frame of `sensor` costs its node (its capture and
+// pre-processing overlap on two cores, as measured).
 double FrameSeconds(const sensors::SensorConfig& sensor, const pipeline::PipelineConfig& p) {
-  double s = kPerFrameS;
+  double s = 0.0;
   switch (sensor.type) {
     case sensors::SensorType::kFisheyeStereo:
       s += kCameraPerPixelS * 2.0 * sensor.fisheye.width_px * sensor.fisheye.height_px;

@@ -75,7 +75,7 @@ class In {
     const auto n = Get<std::uint32_t>();
     Need(std::size_t{n} * sizeof(float));
     std::vector<float> v(n);
-    std::memcpy(v.data(), s_.data() + at_, std::size_t{n} * sizeof(float));
+    if (n > 0) std::memcpy(v.data(), s_.data() + at_, std::size_t{n} * sizeof(float));
     at_ += std::size_t{n} * sizeof(float);
     return v;
   }
@@ -181,8 +181,11 @@ std::vector<Record> SplitRecords(std::string_view bytes, const std::string& path
   while (records.empty() || records.back().tag == 1) {
     const bool header = records.empty();
     const std::size_t prefix = header ? kHeaderPrefix : 1;
-    const std::uint8_t tag = header ? 1 : static_cast<std::uint8_t>(bytes[at]);
     const std::string name = RecordName(records.size(), at);
+    if (at == bytes.size())
+      throw core::UsageError(path + ": a sensing trace cut short before " + name +
+                             "; remove it to sense again");
+    const std::uint8_t tag = header ? 1 : static_cast<std::uint8_t>(bytes[at]);
     if (!header && tag > 1)
       throw core::UsageError(path + ": a corrupt sensing trace: " + name +
                              " is of no known kind; remove it to sense again");
@@ -227,9 +230,11 @@ TracedFrame GetFrame(In& in, std::size_t nodes, const std::string& what, std::ui
     f.content.points = GetPoints(in);
   f.content.latent = in.Floats();
   const auto further = in.Get<std::uint32_t>();
-  // Each further observation takes more than one byte: a count beyond the
-  // record's size is malformed, not an allocation.
-  if (further > in.Left()) in.Malformed();
+  // Each further observation takes at least 45 bytes (its flags, a point
+  // observation without points: 40, an empty latent's count): a count the
+  // record cannot hold is malformed, not an allocation.
+  constexpr std::size_t kLeastFurtherBytes = 1 + 40 + 4;
+  if (further > in.Left() / kLeastFurtherBytes) in.Malformed();
   f.content.further.resize(further);
   for (NodeObservation& o : f.content.further) {
     if (in.Get<std::uint8_t>() & kCamera)
