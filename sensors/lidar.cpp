@@ -490,6 +490,16 @@ std::vector<LidarBeam> Lidar::Beams(double t_start_s) const {
 
 PointCloudFrame Lidar::Capture(double t_start_s, const core::WeatherConfig& weather,
                                core::RngStream& noise) {
+  return DoCapture(t_start_s, weather, noise, false);
+}
+
+PointCloudFrame Lidar::CaptureStatic(double t_start_s, const core::WeatherConfig& weather,
+                                     core::RngStream& noise) {
+  return DoCapture(t_start_s, weather, noise, true);
+}
+
+PointCloudFrame Lidar::DoCapture(double t_start_s, const core::WeatherConfig& weather,
+                                 core::RngStream& noise, bool static_only) {
   const LidarConfig& c = config_;
   const std::uint64_t frame_key = noise.NextU64();
   const Overlap overlap{c.min_range_m, c.full_overlap_range_m};
@@ -509,7 +519,10 @@ PointCloudFrame Lidar::Capture(double t_start_s, const core::WeatherConfig& weat
     std::array<float, kBlockBeams> times;
     const std::size_t n = end - begin;
     BlockRays(begin, end, t_start_s, rays.data(), times.data());
-    scene_.IntersectMany(rays.data(), hits.data(), n);
+    if (static_only)
+      scene_.IntersectManyStatic(rays.data(), hits.data(), n);
+    else
+      scene_.IntersectMany(rays.data(), hits.data(), n);
     for (std::size_t j = 0; j < n; ++j)
       shading.Beam(begin + j, rays[j], hits[j], times[j], slots[begin + j], kinds[begin + j]);
   };
@@ -521,7 +534,7 @@ PointCloudFrame Lidar::Capture(double t_start_s, const core::WeatherConfig& weat
                           process_block(blocks_[b].begin, blocks_[b].end);
                       });
   };
-  if (scene_.moving_object_count() == 0) {
+  if (static_only || scene_.moving_object_count() == 0) {
     run_blocks(0, blocks_.size());
   } else {
     for (std::size_t s = 0; s + 1 < slice_blocks_.size(); ++s) {

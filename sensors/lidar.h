@@ -132,6 +132,11 @@ class Lidar {
   // One sweep starting at t_start_s (simulated seconds), lasting 1/rate_hz.
   PointCloudFrame Capture(double t_start_s, const core::WeatherConfig& weather,
                           core::RngStream& noise);
+  // The same sweep of the static world alone, as a survey made with no
+  // moving object about sees it (sim/lidar_survey.h): no moving object is
+  // hit and the scene is not re-posed; the same draws from `noise`.
+  PointCloudFrame CaptureStatic(double t_start_s, const core::WeatherConfig& weather,
+                                core::RngStream& noise);
 
   // The frame's beams in firing order (for benchmarks and tests).
   std::vector<LidarBeam> Beams(double t_start_s) const;
@@ -147,6 +152,8 @@ class Lidar {
 
  private:
   double BeamTime(std::size_t i) const;
+  PointCloudFrame DoCapture(double t_start_s, const core::WeatherConfig& weather,
+                            core::RngStream& noise, bool static_only);
   // Beams [begin, end) of one time slice, at most kBlockBeams of them, are
   // cast as one unit; the partition is fixed at construction.
   static constexpr std::size_t kBlockBeams = 64;

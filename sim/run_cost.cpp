@@ -3,11 +3,14 @@
 #include <sys/statvfs.h>
 #include <unistd.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
 
 #include "core/error.h"
+#include "core/rng.h"
+#include "core/world_geometry.h"
 #include "pipeline/model_resolution.h"
 
 namespace uavsim::sim {
@@ -20,18 +23,51 @@ namespace {
 // (docs/speed.md "Wall-time model"); the shipped scenarios check it.
 constexpr double kSetupS = 1.4;              // the libraries, the world's BVH, the model
 constexpr double kCameraPerPixelS = 2.9e-8;  // per eye pixel: its ray, shading, pre-processing
-constexpr double kCameraEncodeS = 2.0e-3;    // one pass of the image encoder (two 128 x 128 crops)
-constexpr double kLidarPerRayS = 1.2e-7;     // per beam: its ray, pre-processing and encoder
+// per eye pixel, more, when the static-scene cache cannot serve the eye
+// (execution.static_cache off, or the eye outside the static world's
+// bounds: sensors/fisheye_stereo.h): every pixel is cast each frame.
+constexpr double kCameraUncachedPerPixelS = 3.3e-8;
+// The camera's cache needs its eye this far inside the bounds
+// (kStaticBoundsMargin_m of sensors/fisheye_stereo.cpp).
+constexpr double kStaticBoundsMarginM = 0.01;
+constexpr double kCameraEncodeS = 2.0e-3;  // one pass of the image encoder (two 128 x 128 crops)
+constexpr double kLidarPerRayS = 1.2e-7;   // per beam: its ray, pre-processing and encoder
 constexpr double kRadarPerCubeSampleS = 4.0e-8;  // per IF-cube sample: synthesis, FFTs, CFAR
 constexpr double kPerMethodWindowS = 8.0e-4;     // per method and alignment window, at the edge
 
+// The static world's axis-aligned bounds (its meshes' vertices), as the
+// run builds it.
+Eigen::AlignedBox3d StaticBounds(const Scenario& s) {
+  const core::WorldGeometry world =
+      core::BuildWorldGeometry(s.world, s.base_dir, core::RngStream(s.seed, "world"));
+  Eigen::AlignedBox3d box;
+  for (const core::TriangleMesh& m : world.meshes)
+    for (const Eigen::Vector3f& v : m.vertices_m) box.extend(v.cast<double>());
+  return box;
+}
+
+// Whether the camera's static-scene cache serves its left eye (the pose's
+// position; the right eye is a baseline away).
+bool CameraCached(const sensors::FisheyeStereoConfig& camera, const Scenario& s,
+                  const Eigen::AlignedBox3d& bounds) {
+  if (!s.execution.static_cache || bounds.isEmpty()) return false;
+  const Eigen::Vector3d o = camera.pose.position_m;
+  const Eigen::Vector3d margin = Eigen::Vector3d::Constant(kStaticBoundsMarginM);
+  return (o.array() > (bounds.min() + margin).array()).all() &&
+         (o.array() < (bounds.max() - margin).array()).all();
+}
+
 // Seconds a frame of `sensor` costs its node (its capture and
 // pre-processing overlap on two cores, as measured).
-double FrameSeconds(const sensors::SensorConfig& sensor, const pipeline::PipelineConfig& p) {
+double FrameSeconds(const sensors::SensorConfig& sensor, const Scenario& scenario,
+                    const Eigen::AlignedBox3d& bounds) {
+  const pipeline::PipelineConfig& p = scenario.pipeline;
   double s = 0.0;
   switch (sensor.type) {
     case sensors::SensorType::kFisheyeStereo:
-      s += kCameraPerPixelS * 2.0 * sensor.fisheye.width_px * sensor.fisheye.height_px;
+      s += (kCameraPerPixelS +
+            (CameraCached(sensor.fisheye, scenario, bounds) ? 0.0 : kCameraUncachedPerPixelS)) *
+           2.0 * sensor.fisheye.width_px * sensor.fisheye.height_px;
       // The image encoder runs on each observation a frame sends, at most
       // max_observations (when a learned method needs the latents).
       if (pipeline::NeedsTrainedModel(p)) s += kCameraEncodeS * p.preprocess.max_observations;
@@ -74,8 +110,9 @@ double EstimateWallSeconds(const Scenario& s) {
   // Each node senses on a thread of its own: the nodes' work spreads over
   // the cores, but no faster than the busiest node alone.
   double total_per_s = 0.0, busiest_per_s = 0.0;
+  const Eigen::AlignedBox3d bounds = StaticBounds(s);
   for (const NodeConfig& n : s.nodes) {
-    const double per_s = FrameSeconds(n.sensor, s.pipeline) * n.sensor.timing().rate_hz;
+    const double per_s = FrameSeconds(n.sensor, s, bounds) * n.sensor.timing().rate_hz;
     total_per_s += per_s;
     busiest_per_s = std::max(busiest_per_s, per_s);
   }

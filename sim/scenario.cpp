@@ -520,6 +520,9 @@ const std::vector<std::pair<const char*, core::Json>>& LaterPreprocessKeys() {
   static const std::vector<std::pair<const char*, core::Json>> keys = [] {
     const pipeline::PreprocessConfig d;
     return std::vector<std::pair<const char*, core::Json>>{
+        {"/lidar/background", pipeline::LidarBackgroundName(d.lidar.background)},
+        {"/lidar/survey_coverage", d.lidar.survey_coverage},
+        {"/lidar/survey_horizon_s", d.lidar.survey_horizon_s},
         {"/lidar/weather_echo_rejection", d.lidar.weather_echo_rejection},
         {"/lidar/fog_echo_margin", d.lidar.fog_echo_margin},
         {"/lidar/rain_echo_margin", d.lidar.rain_echo_margin},

@@ -15,6 +15,7 @@
 #include "sensors/fmcw_radar.h"
 #include "sensors/lidar.h"
 #include "sensors/radar_processor.h"
+#include "sim/lidar_survey.h"
 #include "sim/recorder.h"
 #include "sim/sensing_trace.h"
 #include "sim/world_model.h"
@@ -146,7 +147,12 @@ class LidarNodeSensor final : public NodeSensor {
   LidarNodeSensor(const NodeConfig& node, const Scenario& s, SensorContext c)
       : c_(std::move(c)),
         lidar_(node.sensor.lidar, *c_.scene),
-        preprocess_(node.sensor.lidar, s.pipeline.preprocess, c_.weather) {}
+        preprocess_(node.sensor.lidar, s.pipeline.preprocess, c_.weather) {
+    if (s.pipeline.preprocess.lidar.background == pipeline::LidarBackground::kSurvey &&
+        !s.pipeline.preprocess.LidarRaw())
+      preprocess_.SetStaticMap(
+          SurveyStaticScene(node, s, c_.world.geometry(), lidar_, preprocess_).map);
+  }
 
  private:
   // The LiDAR poses the scene at each point's own time.

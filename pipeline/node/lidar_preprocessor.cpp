@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <utility>
 #include <vector>
 
 #include "pipeline/node/point_clustering.h"
@@ -47,7 +49,24 @@ bool LidarPreprocessor::IsWeatherEcho(const sensors::LidarPoint& p) const {
 void LidarPreprocessor::Reset() {
   frames_seen_ = 0;
   occupancy_.clear();
-  static_voxels_.clear();
+  if (!surveyed_) static_voxels_.reset();
+}
+
+void LidarPreprocessor::AddSurveyScan(const sensors::PointCloudFrame& scan, StaticMap& map) const {
+  for (const sensors::LidarPoint& p : scan.points) {
+    int ix, iy, iz;
+    if (!VoxelOf(p, ix, iy, iz)) continue;
+    if (reject_weather_ && IsWeatherEcho(p)) continue;
+    map.insert(VoxelKey(ix, iy, iz));
+  }
+}
+
+void LidarPreprocessor::SetStaticMap(std::shared_ptr<const StaticMap> map) {
+  if (config_.background != LidarBackground::kSurvey)
+    throw std::logic_error("LidarPreprocessor::SetStaticMap: lidar.background is not \"survey\"");
+  static_voxels_ = std::move(map);
+  surveyed_ = true;
+  occupancy_.clear();
 }
 
 std::uint64_t LidarPreprocessor::VoxelKey(int ix, int iy, int iz) const {
@@ -83,7 +102,9 @@ void LidarPreprocessor::Learn(const sensors::PointCloudFrame& frame) {
 bool LidarPreprocessor::IsStatic(const sensors::LidarPoint& p) const {
   int ix, iy, iz;
   if (!VoxelOf(p, ix, iy, iz)) return true;
-  if (static_voxels_.count(VoxelKey(ix, iy, iz))) return true;
+  if (!static_voxels_) return false;
+  const StaticMap& map = *static_voxels_;
+  if (map.count(VoxelKey(ix, iy, iz))) return true;
   if (!config_.static_neighbourhood) return false;
   // Only the few non-static points get here, so the 26 look-ups stay cheap.
   // They absorb range noise that moves a surface's return across a voxel
@@ -91,7 +112,7 @@ bool LidarPreprocessor::IsStatic(const sensors::LidarPoint& p) const {
   for (int dz = -1; dz <= 1; ++dz)
     for (int dy = -1; dy <= 1; ++dy)
       for (int dx = -1; dx <= 1; ++dx)
-        if (static_voxels_.count(VoxelKey(ix + dx, iy + dy, iz + dz))) return true;
+        if (map.count(VoxelKey(ix + dx, iy + dy, iz + dz))) return true;
   return false;
 }
 
@@ -117,6 +138,9 @@ PointObservation LidarPreprocessor::ObservationOf(const sensors::PointCloudFrame
 PointObservation LidarPreprocessor::Process(const sensors::PointCloudFrame& frame,
                                             std::vector<PointObservation>* further) {
   if (further) further->clear();
+  if (!raw_ && config_.background == LidarBackground::kSurvey && !surveyed_)
+    throw std::logic_error(
+        "LidarPreprocessor::Process: lidar.background \"survey\" needs SetStaticMap first");
   std::vector<std::size_t> kept;  // indices into frame.points, increasing
   if (raw_) {
     kept.reserve(frame.points.size());
@@ -133,8 +157,10 @@ PointObservation LidarPreprocessor::Process(const sensors::PointCloudFrame& fram
       // The smallest whole number of scans that reaches the fraction.
       const auto min_frames = static_cast<std::uint32_t>(
           std::max(1.0, std::ceil(config_.occupancy_threshold * n - 1e-9)));
+      auto map = std::make_shared<StaticMap>();
       for (const auto& [key, o] : occupancy_)
-        if (o.frames >= min_frames) static_voxels_.insert(key);
+        if (o.frames >= min_frames) map->insert(key);
+      static_voxels_ = std::move(map);
       occupancy_.clear();
       occupancy_.rehash(0);
     }

@@ -2,10 +2,19 @@
 // of the target is simply obtained by subtracting the static background
 // from each LiDAR scan"):
 //
-//   warm-up   the first lidar.warmup_frames scans build a static background:
-//             a voxel (edge voxel_size_m, world frame) is static if it holds
-//             a return in at least occupancy_threshold of those scans.
-//             Nothing is reported meanwhile (empty observations).
+//   warm-up   (lidar.background "warmup") the first lidar.warmup_frames
+//             scans build a static background: a voxel (edge voxel_size_m,
+//             world frame) is static if it holds a return in at least
+//             occupancy_threshold of those scans. Nothing is reported
+//             meanwhile (empty observations).
+//   survey    (lidar.background "survey", the paper's prior measurements)
+//             the background is a static map made before the first frame
+//             (AddSurveyScan over sim/lidar_survey.h's scans of the static
+//             scene, then SetStaticMap): a voxel is static if any survey
+//             scan returned from it (weather echoes excluded as below).
+//             Reported from the first frame. An object that arrives after
+//             the survey (a parked car) is not in the map: its points are
+//             dynamic for as long as it stays.
 //   per scan  a point is dynamic unless its voxel (or, with
 //             static_neighbourhood, one of the 26 around it) is static;
 //             DBSCAN (cluster_eps_m, cluster_min_points) of the dynamic
@@ -42,6 +51,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <unordered_map>
 #include <unordered_set>
 #include <vector>
@@ -64,12 +74,22 @@ class LidarPreprocessor {
   PointObservation Process(const sensors::PointCloudFrame& frame,
                            std::vector<PointObservation>* further = nullptr);
 
-  // Forgets the background and the frame count.
+  // Forgets the frame count and a background learnt in warm-up (a
+  // surveyed map stays).
   void Reset();
 
-  bool warmed_up() const { return frames_seen_ >= config_.warmup_frames; }
+  // Voxel keys of a static background.
+  using StaticMap = std::unordered_set<std::uint64_t>;
+  // Adds the voxels of a survey scan's returns to `map` (weather echoes
+  // excluded when the run excludes them).
+  void AddSurveyScan(const sensors::PointCloudFrame& scan, StaticMap& map) const;
+  // Takes `map` as the background, as if warmed up: reported from the
+  // next frame. Throws std::logic_error unless lidar.background is "survey".
+  void SetStaticMap(std::shared_ptr<const StaticMap> map);
+
+  bool warmed_up() const { return surveyed_ || frames_seen_ >= config_.warmup_frames; }
   int frames_seen() const { return frames_seen_; }
-  std::size_t static_voxel_count() const { return static_voxels_.size(); }
+  std::size_t static_voxel_count() const { return static_voxels_ ? static_voxels_->size() : 0; }
 
  private:
   struct Occupancy {
@@ -96,7 +116,8 @@ class LidarPreprocessor {
   Eigen::Vector3d sensor_position_w_;
   int frames_seen_ = 0;
   std::unordered_map<std::uint64_t, Occupancy> occupancy_;  // during warm-up only
-  std::unordered_set<std::uint64_t> static_voxels_;
+  std::shared_ptr<const StaticMap> static_voxels_;          // null: none yet
+  bool surveyed_ = false;
 };
 
 }  // namespace uavsim::pipeline

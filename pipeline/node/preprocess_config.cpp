@@ -29,6 +29,10 @@ void Visit(V& v, CameraPreprocessConfig& c) {
 template <class V>
 void Visit(V& v, LidarPreprocessConfig& c) {
   v("raw", c.raw);
+  v.Enum("background", c.background,
+         {{"warmup", LidarBackground::kWarmup}, {"survey", LidarBackground::kSurvey}});
+  v("survey_coverage", c.survey_coverage, Rule{0.0, 1.0, true, false});
+  v("survey_horizon_s", c.survey_horizon_s, Rule::Positive(3600.0));
   v("voxel_size_m", c.voxel_size_m, Rule::Range(0.01, 100.0));
   v("warmup_frames", c.warmup_frames, Rule::Range(1, 100000));
   v("occupancy_threshold", c.occupancy_threshold, Rule{0.0, 1.0, true, false});
@@ -39,6 +43,10 @@ void Visit(V& v, LidarPreprocessConfig& c) {
   v("weather_echo_rejection", c.weather_echo_rejection);
   v("fog_echo_margin", c.fog_echo_margin, Rule::Range(1.0, 1000.0));
   v("rain_echo_margin", c.rain_echo_margin, Rule::Range(1.0, 1000.0));
+}
+
+const char* LidarBackgroundName(LidarBackground b) {
+  return b == LidarBackground::kWarmup ? "warmup" : "survey";
 }
 
 const char* RadarSelectionName(RadarSelection s) {

@@ -45,9 +45,28 @@ struct CameraPreprocessConfig {
   int epipolar_slack_px = 1;  // rows searched above and below the left row
 };
 
+// Where a LiDAR node's static background comes from (lidar_preprocessor.h).
+enum class LidarBackground {
+  kWarmup,  // the run's first warmup_frames scans, target and all (ours, the default so far)
+  kSurvey,  // scans of the static scene before the run's first frame (paper Sec. IV-A)
+};
+// "warmup", "survey".
+const char* LidarBackgroundName(LidarBackground b);
+
 struct LidarPreprocessConfig {
   bool raw = false;
-  // Static background: voxels hit in at least occupancy_threshold of the
+  // "warmup" (below) or "survey": the paper's "multiple prior measurements"
+  // of the static surroundings, made by sim/lidar_survey.h before the run's
+  // first frame with no moving object about, long enough that
+  // survey_coverage of the direction cells the scan pattern reaches within
+  // survey_horizon_s are hit at least once, a cell being one voxel seen at
+  // the reach of a white target head-on (max_range_m / sqrt(reference
+  // reflectivity)); every voxel a survey scan returns from is static, and
+  // the node reports from its first frame.
+  LidarBackground background = LidarBackground::kWarmup;
+  double survey_coverage = 0.99;
+  double survey_horizon_s = 60.0;
+  // Static background ("warmup"): voxels hit in at least occupancy_threshold of the
   // first warmup_frames scans. Nothing is reported during warm-up. The
   // default suits the default Livox-like rosette, whose non-repetitive
   // pattern hits a given 0.5 m voxel in only a few of its 0.1 s scans: one

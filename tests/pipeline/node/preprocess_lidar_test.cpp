@@ -297,3 +297,71 @@ TEST_CASE("LidarPreprocessor: fog and rain echoes are dropped, hard targets kept
 
 }  // namespace
 }  // namespace uavsim::pipeline
+
+namespace uavsim::pipeline {
+namespace {
+
+PreprocessConfig SurveyConfig() {
+  PreprocessConfig config;
+  config.lidar.background = LidarBackground::kSurvey;
+  return config;
+}
+
+// A survey of five scans of the static scene alone (scans -5 .. -1).
+std::shared_ptr<const LidarPreprocessor::StaticMap> SurveyOf(const LidarPreprocessor& pre) {
+  auto map = std::make_shared<LidarPreprocessor::StaticMap>();
+  for (int k = -5; k < 0; ++k) pre.AddSurveyScan(Scan(k, {}), *map);
+  return map;
+}
+
+TEST_CASE("LidarPreprocessor survey: a prior map, the target reported from the first scan",
+          "[pipeline]") {
+  LidarPreprocessor pre(Sensor(), SurveyConfig());
+  CHECK_THROWS_AS(pre.Process(Scan(0, {})), std::logic_error);  // no map yet
+  pre.SetStaticMap(SurveyOf(pre));
+  CHECK(pre.warmed_up());
+  CHECK(pre.static_voxel_count() > 1000);
+  // The first scan already: the static scene gone, a passing box kept whole,
+  // including where the box is on the frame where warm-up would learn it.
+  const Eigen::Vector3d centre(12.0, 1.0, 5.0);
+  const std::vector<sensors::LidarPoint> box = Box(centre, 0.5, 6);
+  const PointObservation first = pre.Process(Scan(0, {box}));
+  REQUIRE(first.count() == box.size());
+  for (std::size_t i = 0; i < first.count(); ++i)
+    CHECK(InsideBox(&first.values[4 * i], centre, 0.5));
+  // Back at the same place later: still kept (a warm-up background would
+  // have learnt the box's voxels during its first scans).
+  CHECK(pre.Process(Scan(1, {})).count() == 0);
+  CHECK(pre.Process(Scan(2, {box})).count() == box.size());
+  // Reset keeps the surveyed map.
+  pre.Reset();
+  CHECK(pre.warmed_up());
+  CHECK(pre.Process(Scan(3, {box})).count() == box.size());
+}
+
+TEST_CASE("LidarPreprocessor survey: a parked car that came after the survey stays dynamic",
+          "[pipeline]") {
+  LidarPreprocessor pre(Sensor(), SurveyConfig());
+  pre.SetStaticMap(SurveyOf(pre));
+  // A 2 m box (a parked car) on the ground at 25 m from scan 0 on: not
+  // in the map, so its points are dynamic in every scan, and as the largest
+  // cluster it is what the node sends (the candidate's score, not the
+  // background, must turn it down).
+  const Eigen::Vector3d car(25.0, -6.0, 1.0);
+  const std::vector<sensors::LidarPoint> parked = Box(car, 2.0, 12);
+  for (int k = 0; k < 30; ++k) {
+    const PointObservation obs = pre.Process(Scan(k, {parked}));
+    INFO("scan " << k);
+    REQUIRE(obs.count() > 0);
+    CHECK(InsideBox(&obs.values[0], car, 2.0));
+  }
+}
+
+TEST_CASE("LidarPreprocessor: SetStaticMap needs background \"survey\"", "[pipeline]") {
+  LidarPreprocessor pre(Sensor(), PreprocessConfig{});
+  CHECK_THROWS_AS(pre.SetStaticMap(std::make_shared<LidarPreprocessor::StaticMap>()),
+                  std::logic_error);
+}
+
+}  // namespace
+}  // namespace uavsim::pipeline
