@@ -13,13 +13,23 @@
 //
 // Determinism: the survey's noise comes from the stream "survey/<node id>"
 // under seed 0, not the run's seed: a site is surveyed once, and every
-// flight over it (every seed) uses the same map. The map is kept for the
-// process's life, keyed by the node's sensor, its LiDAR pre-processing,
-// the world's static geometry and the weather: a collection's episodes, or
-// a sweep point's runs, pay for one survey per site and weather. Thread-safe.
+// flight over it (every seed) uses the same map.
+//
+// Cache: a survey is keyed by the node's sensor, its LiDAR pre-processing,
+// a hash of the world's static geometry, the weather and this build
+// (version and git hash). It is kept for the process's life and written to
+// SurveyCacheDir() as surveys/<SHA-256 of the key>.survey (atomically), so
+// later runs, a sweep's points and a collection's episodes on this machine
+// pay nothing for it. A cached file is used only if it is whole: its magic,
+// its own copy of the key (equal to the wanted one) and the SHA-256 of its
+// bytes are checked; anything else is surveyed again and rewritten. The map
+// is the same either way (a pure function of the key), so outputs are too.
+// Thread-safe.
 #pragma once
 
 #include <memory>
+#include <optional>
+#include <string>
 
 #include "core/world_geometry.h"
 #include "pipeline/node/lidar_preprocessor.h"
@@ -38,6 +48,17 @@ struct LidarSurvey {
 // The survey of `node` (a LiDAR node whose lidar.background is "survey")
 // with `lidar` (the node's sensor on a scene view of its own; the survey
 // casts into it and leaves it unposed) and the node's pre-processor.
+// Where surveys are cached on disk: $UAVSIM_CACHE_DIR, else
+// $XDG_CACHE_HOME/uavsim, else $HOME/.cache/uavsim; "" (no disk cache) when
+// UAVSIM_CACHE_DIR is "off" or no folder is known.
+std::string SurveyCacheDir();
+
+// A survey file's bytes for `key` (the map's voxels sorted), and back: the
+// survey if `bytes` are a whole survey file written for exactly `key`,
+// else nothing.
+std::string EncodeSurvey(const std::string& key, const LidarSurvey& survey);
+std::optional<LidarSurvey> DecodeSurvey(const std::string& bytes, const std::string& key);
+
 LidarSurvey SurveyStaticScene(const NodeConfig& node, const Scenario& s,
                               const core::WorldGeometry& world, sensors::Lidar& lidar,
                               const pipeline::LidarPreprocessor& preprocessor);

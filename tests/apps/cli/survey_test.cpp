@@ -1,0 +1,109 @@
+// The LiDAR's survey (lidar.background "survey") through the built binary:
+// a run surveys once and caches the map on disk; a run that finds the cache
+// gives the same outputs byte for byte, so does a run whose cached file was
+// damaged (it surveys again and rewrites the same file) and one with the
+// disk cache off.
+#include <catch2/catch.hpp>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "core/json_io.h"
+#include "test_support.h"
+
+namespace fs = std::filesystem;
+using uavsim::core::Json;
+using uavsim::testing::FileList;
+using uavsim::testing::ReadFile;
+using uavsim::testing::RunCli;
+using uavsim::testing::TempDir;
+using uavsim::testing::WithoutWallClock;
+using uavsim::testing::WriteFile;
+
+namespace {
+
+const std::string kDefault = std::string(UAVSIM_SOURCE_DIR) + "/scenarios/default.json";
+
+void CheckSameRun(const std::string& a, const std::string& b) {
+  const auto files = FileList(a);
+  REQUIRE(files.size() > 8);
+  CHECK(FileList(b) == files);
+  for (const std::string& f : files) {
+    INFO(f);
+    if (!fs::exists(b + "/" + f) || f == "report.html") continue;
+    if (f == "metrics.json" || f == "manifest.json")
+      CHECK(WithoutWallClock(Json::parse(ReadFile(a + "/" + f))) ==
+            WithoutWallClock(Json::parse(ReadFile(b + "/" + f))));
+    else
+      CHECK(ReadFile(a + "/" + f) == ReadFile(b + "/" + f));
+  }
+}
+
+// 1 s of the default city with the survey (short: coverage 0.5 over 2 s),
+// the disk cache in `cache`.
+void Run(const std::string& out, const std::string& cache, std::vector<std::string> extra = {}) {
+  ::setenv("UAVSIM_CACHE_DIR", cache.c_str(), 1);
+  std::vector<std::string> args = {"run",
+                                   kDefault,
+                                   "--out",
+                                   out,
+                                   "--quiet",
+                                   "--duration",
+                                   "1",
+                                   "--set",
+                                   "/pipeline/methods=[\"ekf\",\"anchor_track\"]",
+                                   "--set",
+                                   "/pipeline/preprocess/lidar/survey_coverage=0.5",
+                                   "--set",
+                                   "/pipeline/preprocess/lidar/survey_horizon_s=2"};
+  args.insert(args.end(), extra.begin(), extra.end());
+  const auto r = RunCli(args);
+  ::unsetenv("UAVSIM_CACHE_DIR");
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+}
+
+std::vector<std::string> CachedFiles(const std::string& cache) {
+  std::vector<std::string> files;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(cache + "/surveys", ec))
+    files.push_back(e.path().string());
+  return files;
+}
+
+}  // namespace
+
+TEST_CASE("Survey: cached on disk, a cached, damaged or uncached survey gives the same run",
+          "[sim][slow]") {
+  const std::string dir = TempDir("survey");
+  const std::string cache = dir + "/cache";
+  const std::vector<std::string> survey = {"--set", "/pipeline/preprocess/lidar/background=survey"};
+  Run(dir + "/first", cache, survey);
+  const auto files = CachedFiles(cache);
+  REQUIRE(files.size() == 1);  // one LiDAR node
+  const std::string written = ReadFile(files[0]);
+
+  Run(dir + "/cached", cache, survey);
+  CheckSameRun(dir + "/first", dir + "/cached");
+  CHECK(ReadFile(files[0]) == written);
+
+  std::string damaged = written;
+  damaged[damaged.size() / 2] = static_cast<char>(damaged[damaged.size() / 2] ^ 0x40);
+  WriteFile(files[0], damaged);
+  Run(dir + "/damaged", cache, survey);
+  CheckSameRun(dir + "/first", dir + "/damaged");
+  CHECK(ReadFile(files[0]) == written);  // surveyed again and rewritten
+
+  Run(dir + "/off", "off", survey);
+  CheckSameRun(dir + "/first", dir + "/off");
+  CHECK(CachedFiles(cache).size() == 1);
+
+  // The survey differs from the warm-up (the LiDAR sends from its first
+  // frame), and the default is the warm-up: an explicit "warmup" changes
+  // nothing.
+  Run(dir + "/default", cache);
+  Run(dir + "/warmup", cache, {"--set", "/pipeline/preprocess/lidar/background=warmup"});
+  CheckSameRun(dir + "/default", dir + "/warmup");
+  CHECK(ReadFile(dir + "/default/packets.csv") != ReadFile(dir + "/first/packets.csv"));
+}
