@@ -1,5 +1,7 @@
 #include "test_support.h"
 
+#include <catch2/catch.hpp>
+
 #include <fcntl.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -275,6 +277,21 @@ std::vector<std::string> FileList(const std::string& root) {
 core::Json WithoutWallClock(core::Json j) {
   for (const char* k : {"wall_s", "realtime_factor", "profile_s", "started_utc"}) j.erase(k);
   return j;
+}
+
+void CheckSameRun(const std::string& a, const std::string& b) {
+  const auto files = FileList(a);
+  REQUIRE(files.size() > 8);
+  CHECK(FileList(b) == files);
+  for (const std::string& f : files) {
+    INFO(f);
+    if (!fs::exists(b + "/" + f) || f == "report.html") continue;
+    if (f == "metrics.json" || f == "manifest.json")
+      CHECK(WithoutWallClock(core::Json::parse(ReadFile(a + "/" + f))) ==
+            WithoutWallClock(core::Json::parse(ReadFile(b + "/" + f))));
+    else
+      CHECK(ReadFile(a + "/" + f) == ReadFile(b + "/" + f));
+  }
 }
 
 }  // namespace uavsim::testing

@@ -108,5 +108,9 @@ std::vector<std::string> FileList(const std::string& root);
 // (wall_s, realtime_factor, profile_s, started_utc): what two runs of the
 // same scenario and seed must share.
 core::Json WithoutWallClock(core::Json j);
+// Catch checks that every file of run folder `a` is in `b` and the same
+// byte for byte, but for metrics.json's and manifest.json's wall-clock
+// fields and report.html (which shows the wall times).
+void CheckSameRun(const std::string& a, const std::string& b);
 
 }  // namespace uavsim::testing

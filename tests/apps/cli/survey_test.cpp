@@ -9,36 +9,18 @@
 #include <string>
 #include <vector>
 
-#include "core/json_io.h"
 #include "test_support.h"
 
 namespace fs = std::filesystem;
-using uavsim::core::Json;
-using uavsim::testing::FileList;
+using uavsim::testing::CheckSameRun;
 using uavsim::testing::ReadFile;
 using uavsim::testing::RunCli;
 using uavsim::testing::TempDir;
-using uavsim::testing::WithoutWallClock;
 using uavsim::testing::WriteFile;
 
 namespace {
 
 const std::string kDefault = std::string(UAVSIM_SOURCE_DIR) + "/scenarios/default.json";
-
-void CheckSameRun(const std::string& a, const std::string& b) {
-  const auto files = FileList(a);
-  REQUIRE(files.size() > 8);
-  CHECK(FileList(b) == files);
-  for (const std::string& f : files) {
-    INFO(f);
-    if (!fs::exists(b + "/" + f) || f == "report.html") continue;
-    if (f == "metrics.json" || f == "manifest.json")
-      CHECK(WithoutWallClock(Json::parse(ReadFile(a + "/" + f))) ==
-            WithoutWallClock(Json::parse(ReadFile(b + "/" + f))));
-    else
-      CHECK(ReadFile(a + "/" + f) == ReadFile(b + "/" + f));
-  }
-}
 
 // 1 s of the default city with the survey (short: coverage 0.5 over 2 s),
 // the disk cache in `cache`.

@@ -13,6 +13,7 @@
 
 namespace fs = std::filesystem;
 using uavsim::core::Json;
+using uavsim::testing::CheckSameRun;
 using uavsim::testing::FileList;
 using uavsim::testing::ReadFile;
 using uavsim::testing::RunCli;
@@ -23,23 +24,6 @@ using uavsim::testing::WriteFile;
 namespace {
 
 const std::string kDefault = std::string(UAVSIM_SOURCE_DIR) + "/scenarios/default.json";
-
-// Every file of `a` is in `b`, equal byte for byte but for the wall-clock
-// fields and report.html (which shows the wall times).
-void CheckSameRun(const std::string& a, const std::string& b) {
-  const auto files = FileList(a);
-  REQUIRE(files.size() > 8);
-  CHECK(FileList(b) == files);
-  for (const std::string& f : files) {
-    INFO(f);
-    if (!fs::exists(b + "/" + f) || f == "report.html") continue;
-    if (f == "metrics.json" || f == "manifest.json")
-      CHECK(WithoutWallClock(Json::parse(ReadFile(a + "/" + f))) ==
-            WithoutWallClock(Json::parse(ReadFile(b + "/" + f))));
-    else
-      CHECK(ReadFile(a + "/" + f) == ReadFile(b + "/" + f));
-  }
-}
 
 std::vector<std::string> TraceFiles(const std::string& dir) {
   std::vector<std::string> f;
