@@ -52,6 +52,7 @@ core::Json ExtensionsOf(const ModelManifest& m) {
 core::Json NodeExtensionsOf(const PreprocessConfig& p) {
   core::Json ext = core::Json::array();
   if (p.lidar.weather_echo_rejection) ext.push_back("lidar.weather_echo_rejection=true");
+  if (p.lidar.drone_gate) ext.push_back("lidar.drone_gate=true");
   if (p.radar.rain_doppler_rejection) ext.push_back("radar.rain_doppler_rejection=true");
   if (p.radar.selection != RadarSelection::kLargest)
     ext.push_back(std::string("radar.selection=") + RadarSelectionName(p.radar.selection));

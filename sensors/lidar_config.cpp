@@ -1,5 +1,6 @@
 #include "sensors/lidar_config.h"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -13,6 +14,25 @@ using core::Rule;
 double LidarConfig::RaysPerFrame() const {
   if (preset != LidarPreset::kSpinning32) return std::ceil(points_per_s / timing.rate_hz);
   return channels * std::ceil(360.0 / azimuth_resolution_deg);
+}
+
+double LidarConfig::FieldSolidAngleSr() const {
+  constexpr double kDeg = 3.14159265358979323846 / 180.0;
+  const auto band = [](double lo_deg, double hi_deg) {
+    return 2.0 * 3.14159265358979323846 * (std::sin(hi_deg * kDeg) - std::sin(lo_deg * kDeg));
+  };
+  switch (preset) {
+    case LidarPreset::kSpinning32:
+      if (!vertical_angles_deg.empty())
+        return band(*std::min_element(vertical_angles_deg.begin(), vertical_angles_deg.end()),
+                    *std::max_element(vertical_angles_deg.begin(), vertical_angles_deg.end()));
+      return band(vertical_min_deg, vertical_max_deg);
+    case LidarPreset::kLivoxRosette:
+      return 2.0 * 3.14159265358979323846 * (1.0 - std::cos(0.5 * fov_deg * kDeg));
+    case LidarPreset::kLivoxMid360:
+      return band(kMid360MinElevationDeg, kMid360MaxElevationDeg);
+  }
+  return 4.0 * 3.14159265358979323846;
 }
 
 template <class V>

@@ -86,6 +86,10 @@ struct LidarConfig {
 
   // Estimates in double: a validated config can still ask for more than 2^64.
   double RaysPerFrame() const;
+  // The solid angle of the scan's field, steradians (spinning: the band
+  // between its lowest and highest channel; rosette: the cone of fov_deg;
+  // Mid-360: 360 deg x [-7, 52] deg).
+  double FieldSolidAngleSr() const;
   // At most one return per ray: x, y, z, intensity and a time offset, float32.
   double RawBytesPerFrame() const { return RaysPerFrame() * 20.0; }
 };

@@ -1,5 +1,6 @@
 #include "pipeline/node/lidar_preprocessor.h"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -116,6 +117,40 @@ bool LidarPreprocessor::IsStatic(const sensors::LidarPoint& p) const {
   return false;
 }
 
+std::vector<int> LidarPreprocessor::ChooseClusters(const DbscanClusters& clusters,
+                                                   const std::vector<float>& xyz, int k) const {
+  if (!config_.drone_gate) return LargestClusters(clusters, k);
+  const std::size_t n = clusters.size.size();
+  std::vector<Eigen::AlignedBox3d> box(n);
+  std::vector<Eigen::Vector3d> sum(n, Eigen::Vector3d::Zero());
+  for (std::size_t i = 0; i < clusters.label.size(); ++i) {
+    const int c = clusters.label[i];
+    if (c == DbscanClusters::kNoise) continue;
+    const Eigen::Vector3d p(xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]);
+    box[static_cast<std::size_t>(c)].extend(p);
+    sum[static_cast<std::size_t>(c)] += p;
+  }
+  const double max_extent_m =
+      config_.drone_max_size_m + config_.drone_max_speed_mps / sensor_.timing.rate_hz;
+  const double beams_per_sr = sensor_.RaysPerFrame() / sensor_.FieldSolidAngleSr();
+  const double area_m2 = config_.drone_max_size_m * config_.drone_max_size_m;
+  DbscanClusters plausible = clusters;
+  for (std::size_t c = 0; c < n; ++c) {
+    const double count = static_cast<double>(clusters.size[c]);
+    if (count == 0.0) continue;
+    const double r = (sum[c] / count - sensor_position_w_).norm();
+    const double expected = std::max(1.0, area_m2 * beams_per_sr / std::max(r * r, 1e-6));
+    if (box[c].diagonal().norm() > max_extent_m || count > config_.drone_count_margin * expected)
+      plausible.size[c] = 0;
+  }
+  std::vector<int> chosen = LargestClusters(plausible, k);
+  chosen.erase(
+      std::remove_if(chosen.begin(), chosen.end(),
+                     [&](int c) { return plausible.size[static_cast<std::size_t>(c)] == 0; }),
+      chosen.end());
+  return chosen;
+}
+
 PointObservation LidarPreprocessor::ObservationOf(const sensors::PointCloudFrame& frame,
                                                   const std::vector<std::size_t>& kept) const {
   PointObservation obs;
@@ -183,7 +218,7 @@ PointObservation LidarPreprocessor::Process(const sensors::PointCloudFrame& fram
           Dbscan(xyz, 3, config_.cluster_eps_m, config_.cluster_min_points);
       const int extra = further ? max_observations_ - 1 : 0;
       ChosenPoints points =
-          PointsOfClusters(clusters, LargestClusters(clusters, config_.clusters_kept + extra),
+          PointsOfClusters(clusters, ChooseClusters(clusters, xyz, config_.clusters_kept + extra),
                            static_cast<std::size_t>(config_.clusters_kept), dynamic);
       kept = std::move(points.kept);
       for (const auto& group : points.further) further->push_back(ObservationOf(frame, group));

@@ -31,6 +31,18 @@
 //             and the largest raindrop echo of sensors/lidar_atmosphere.h
 //             for the scenario's weather (the node is taken to know the
 //             visibility and rain rate, as from a visibility meter).
+//   drone     (lidar.drone_gate, ours) before the clusters are chosen, a
+//             cluster whose points a drone could not have returned is no
+//             candidate: its bounding-box diagonal above drone_max_size_m +
+//             drone_max_speed_mps / rate_hz (the drone and its smear over
+//             one scan), or more points than drone_count_margin x
+//             max(1, drone_max_size_m^2 / r^2 x beams / field) (a square of
+//             the largest size at the cluster centroid's range r from the
+//             sensor, at the scan's mean beam density: rays per frame over
+//             LidarConfig::FieldSolidAngleSr). The largest candidates are
+//             kept; a scan with none sends nothing. A parked car (a new
+//             static object) fails both; a fog shell near the sensor fails
+//             the extent.
 //   raw       (config.LidarRaw()) no background, no clustering, no weather
 //             rejection, from the first scan on.
 // Either way at most PointObservation::kMaxPoints points, evenly spaced in
@@ -63,6 +75,8 @@
 #include "sensors/lidar_config.h"
 
 namespace uavsim::pipeline {
+
+struct DbscanClusters;
 
 class LidarPreprocessor {
  public:
@@ -103,6 +117,10 @@ class LidarPreprocessor {
   void Learn(const sensors::PointCloudFrame& frame);
   // Whether the return could be a fog or rain echo (see above).
   bool IsWeatherEcho(const sensors::LidarPoint& p) const;
+  // The ids of the clusters to keep (the `k` largest, with drone_gate only
+  // those a drone could have made), largest first.
+  std::vector<int> ChooseClusters(const DbscanClusters& clusters, const std::vector<float>& xyz,
+                                  int k) const;
   // The observation of the frame's points `kept` (indices, increasing).
   PointObservation ObservationOf(const sensors::PointCloudFrame& frame,
                                  const std::vector<std::size_t>& kept) const;

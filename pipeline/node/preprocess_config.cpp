@@ -43,6 +43,10 @@ void Visit(V& v, LidarPreprocessConfig& c) {
   v("weather_echo_rejection", c.weather_echo_rejection);
   v("fog_echo_margin", c.fog_echo_margin, Rule::Range(1.0, 1000.0));
   v("rain_echo_margin", c.rain_echo_margin, Rule::Range(1.0, 1000.0));
+  v("drone_gate", c.drone_gate);
+  v("drone_max_size_m", c.drone_max_size_m, Rule::Positive(100.0));
+  v("drone_max_speed_mps", c.drone_max_speed_mps, Rule::NonNegative(1000.0));
+  v("drone_count_margin", c.drone_count_margin, Rule::Positive(1e6));
 }
 
 const char* LidarBackgroundName(LidarBackground b) {

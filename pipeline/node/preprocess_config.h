@@ -98,6 +98,17 @@ struct LidarPreprocessConfig {
   bool weather_echo_rejection = false;
   double fog_echo_margin = 20.0;
   double rain_echo_margin = 1.2;
+  // A drone or nothing (ours, off by default): with drone_gate, a cluster
+  // is a candidate only if a drone could have made it
+  // (lidar_preprocessor.h): its extent at most drone_max_size_m plus the
+  // distance drone_max_speed_mps covers in one scan, and its point count at
+  // most drone_count_margin times the returns a drone_max_size_m square
+  // would give at its range with the scan's mean beam density; the largest
+  // candidates are kept, and a scan with none sends nothing.
+  bool drone_gate = false;
+  double drone_max_size_m = 1.0;
+  double drone_max_speed_mps = 20.0;
+  double drone_count_margin = 4.0;
 };
 
 enum class RadarSelection {

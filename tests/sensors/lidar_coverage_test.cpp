@@ -128,3 +128,38 @@ TEST_CASE("FramesToCover: bad arguments are refused", "[sensors]") {
 
 }  // namespace
 }  // namespace uavsim::sensors
+
+namespace uavsim::sensors {
+namespace {
+
+TEST_CASE("LidarConfig::FieldSolidAngleSr: the solid angle the scan fills over time", "[sensors]") {
+  core::WorldGeometry w;
+  RaycastScene scene(w);
+  const double cell = 1.0 * kPi / 180.0;
+  // The cells a long scan reaches, times a cell's solid angle, against the
+  // formula (boundary cells add a few per cent).
+  LidarConfig mid360;
+  mid360.preset = LidarPreset::kLivoxMid360;
+  mid360.points_per_s = 50000;
+  for (const LidarConfig& c : {Rosette(20000), mid360}) {
+    const Lidar lidar(c, scene);
+    const LidarCoverage cover = FramesToCover(lidar, cell, 1.0, 20.0);
+    const double reached_sr = static_cast<double>(cover.field_cells) * cell * cell;
+    CHECK(reached_sr > 0.97 * c.FieldSolidAngleSr());
+    CHECK(reached_sr < 1.12 * c.FieldSolidAngleSr());
+  }
+  // A spinning LiDAR's band between its lowest and highest channel.
+  LidarConfig spinning;
+  spinning.vertical_min_deg = -15.0;
+  spinning.vertical_max_deg = 45.0;
+  CHECK(spinning.FieldSolidAngleSr() ==
+        Approx(2.0 * kPi * (std::sin(kPi / 4.0) + std::sin(kPi / 12.0))));
+  spinning.vertical_angles_deg = std::vector<double>(32, 0.0);
+  spinning.vertical_angles_deg.front() = -10.0;
+  spinning.vertical_angles_deg.back() = 30.0;
+  CHECK(spinning.FieldSolidAngleSr() ==
+        Approx(2.0 * kPi * (std::sin(kPi / 6.0) + std::sin(kPi / 18.0))));
+}
+
+}  // namespace
+}  // namespace uavsim::sensors

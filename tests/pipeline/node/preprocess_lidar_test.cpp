@@ -341,20 +341,62 @@ TEST_CASE("LidarPreprocessor survey: a prior map, the target reported from the f
 
 TEST_CASE("LidarPreprocessor survey: a parked car that came after the survey stays dynamic",
           "[pipeline]") {
-  LidarPreprocessor pre(Sensor(), SurveyConfig());
+  PreprocessConfig config = SurveyConfig();
+  const bool gate = GENERATE(false, true);
+  config.lidar.drone_gate = gate;
+  LidarPreprocessor pre(Sensor(), config);
   pre.SetStaticMap(SurveyOf(pre));
-  // A 2 m box (a parked car) on the ground at 25 m from scan 0 on: not
-  // in the map, so its points are dynamic in every scan, and as the largest
-  // cluster it is what the node sends (the candidate's score, not the
-  // background, must turn it down).
+  // A 2 m box (a parked car) on the ground at 25 m from scan 0 on: not in
+  // the map, so its points are dynamic in every scan. Without the drone
+  // gate, as the largest cluster it is what the node sends; with it, it is
+  // no candidate (its 3.5 m diagonal is more than a 1 m drone smeared by
+  // 20 m/s over a 0.1 s scan, and its 864 points more than 4 x the 15 a
+  // 1 m square returns at 25 m from this spinning LiDAR: 57 600 rays over
+  // 2 pi (sin 45 deg + sin 15 deg) sr), and a drone-sized box flying by at
+  // the same time is sent instead.
   const Eigen::Vector3d car(25.0, -6.0, 1.0);
   const std::vector<sensors::LidarPoint> parked = Box(car, 2.0, 12);
-  for (int k = 0; k < 30; ++k) {
+  for (int k = 0; k < 10; ++k) {
     const PointObservation obs = pre.Process(Scan(k, {parked}));
-    INFO("scan " << k);
-    REQUIRE(obs.count() > 0);
-    CHECK(InsideBox(&obs.values[0], car, 2.0));
+    INFO("scan " << k << ", gate " << gate);
+    if (gate) {
+      CHECK(obs.count() == 0);
+    } else {
+      REQUIRE(obs.count() > 0);
+      CHECK(InsideBox(&obs.values[0], car, 2.0));
+    }
   }
+  const Eigen::Vector3d drone(12.0, 3.0, 6.0);
+  const std::vector<sensors::LidarPoint> small = Box(drone, 0.5, 5);  // 150 points
+  const PointObservation obs = pre.Process(Scan(10, {parked, small}));
+  REQUIRE(obs.count() > 0);
+  CHECK(InsideBox(&obs.values[0], gate ? drone : car, gate ? 0.5 : 2.0));
+}
+
+TEST_CASE("LidarPreprocessor drone gate: a drone-sized cluster passes at any range it returns",
+          "[pipeline]") {
+  PreprocessConfig config = SurveyConfig();
+  config.lidar.drone_gate = true;
+  LidarPreprocessor pre(Sensor(), config);
+  pre.SetStaticMap(SurveyOf(pre));
+  // A 0.5 m box with 5 x 5 points a face (150) 13.2 m from the sensor, 2 x 2
+  // (24) at 30.7 m: fewer than 4 x a 1 m square's returns there (4 x 55 and
+  // 4 x 10).
+  int k = 0;
+  for (const auto& [centre, n] : {std::pair{Eigen::Vector3d(12.0, 3.0, 6.0), 5},
+                                  std::pair{Eigen::Vector3d(0.0, 30.0, 8.0), 2}}) {
+    const std::vector<sensors::LidarPoint> box = Box(centre, 0.5, n);
+    const PointObservation obs = pre.Process(Scan(k++, {box}));
+    INFO("at " << centre.transpose());
+    CHECK(obs.count() == box.size());
+  }
+  // The same box smeared along 4 m in one scan (a drone at 40 m/s) is not.
+  std::vector<sensors::LidarPoint> smeared;
+  for (int i = 0; i < 9; ++i) {
+    const auto part = Box(Eigen::Vector3d(12.0 + 0.5 * i, 3.0, 6.0), 0.5, 2);
+    smeared.insert(smeared.end(), part.begin(), part.end());
+  }
+  CHECK(pre.Process(Scan(k, {smeared})).count() == 0);
 }
 
 TEST_CASE("LidarPreprocessor: SetStaticMap needs background \"survey\"", "[pipeline]") {
