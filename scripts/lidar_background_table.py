@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/python3
 """The table of docs/nodes.md "The LiDAR's background: warm-up or survey":
 the twin (seed 1) and the default city (seed 7), 20 s, clear / fog 300 m /
 rain 10 mm/h, with lidar.background "warmup", "survey" and "survey" with
