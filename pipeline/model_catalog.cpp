@@ -46,21 +46,6 @@ core::Json ExtensionsOf(const ModelManifest& m) {
   return ext;
 }
 
-// Where the scenario's sensing nodes depart from the paper's pre-processing
-// (Sec. IV-A): the switches of ours that are on (the model was trained on
-// them: the layout hash says so), as "key=value".
-core::Json NodeExtensionsOf(const PreprocessConfig& p) {
-  core::Json ext = core::Json::array();
-  if (p.lidar.weather_echo_rejection) ext.push_back("lidar.weather_echo_rejection=true");
-  if (p.lidar.drone_gate) ext.push_back("lidar.drone_gate=true");
-  if (p.radar.rain_doppler_rejection) ext.push_back("radar.rain_doppler_rejection=true");
-  if (p.radar.selection != RadarSelection::kLargest)
-    ext.push_back(std::string("radar.selection=") + RadarSelectionName(p.radar.selection));
-  if (p.max_observations > 1)
-    ext.push_back("max_observations=" + std::to_string(p.max_observations));
-  return ext;
-}
-
 // The model's temporal regressor ("mamba", the paper's, or one of its
 // baselines); models without a recorded config predate the choice: "mamba".
 const char* TemporalOf(const ModelManifest& m) {
@@ -121,7 +106,7 @@ void ModelCatalog::Load(bool quiet) {
            {"heads", heads},
            {"extensions", ExtensionsOf(m)}};
   if (info_["extensions"].is_array())
-    for (const core::Json& e : NodeExtensionsOf(s_.pipeline->preprocess))
+    for (const std::string& e : NodeExtensions(s_.pipeline->preprocess))
       info_["extensions"].push_back(e);
   const auto& methods = s_.pipeline->methods;
   if (info_["extensions"].is_array() &&

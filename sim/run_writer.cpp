@@ -134,6 +134,7 @@ core::Json Manifest(const FinishedRun& run) {
   manifest["seed"] = run.scenario.seed;
   manifest["started_utc"] = run.started_utc;
   manifest["wall_s"] = run.summary.wall_s;
+  manifest["node_extensions"] = pipeline::NodeExtensions(run.scenario.pipeline.preprocess);
   manifest["scenario"] = ResolvedJson(run.scenario);
   return manifest;
 }

@@ -537,6 +537,7 @@ const std::vector<std::pair<const char*, core::Json>>& LaterPreprocessKeys() {
         {"/radar/min_support", d.radar.min_support},
         {"/radar/gate_m", d.radar.gate_m},
         {"/radar/max_speed_mps", d.radar.max_speed_mps},
+        {"/radar/min_peak_snr_db", d.radar.min_peak_snr_db},
         {"/max_observations", d.max_observations}};
   }();
   return keys;

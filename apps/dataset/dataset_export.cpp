@@ -169,6 +169,7 @@ std::optional<DatasetSummary> RunDatasetExport(const Scenario& base, const Datas
   header.window_s = base.pipeline.window_s;
   header.latent_dim = manifest.empty() ? 0 : base.pipeline.latent_dim;
   header.model = manifest;
+  header.parts = TrajectoryParts(episodes.size(), c.seed);
   {
     core::Progress progress("write " + c.out_file, static_cast<double>(episodes.size()), "episodes",
                             c.quiet);

@@ -290,7 +290,7 @@ void WritePoints(const Writer& w, hid_t episode, const Episode& e, core::Modalit
 
 void WriteEpisode(const Writer& w, hid_t parent, std::size_t index, const Episode& e,
                   std::size_t node_count, const std::vector<std::vector<float>>* latents,
-                  std::int64_t latent_dim) {
+                  std::int64_t latent_dim, int part) {
   char name[16];
   std::snprintf(name, sizeof name, "%06zu", index);
   const Id g = w.Group(parent, name);
@@ -299,6 +299,8 @@ void WriteEpisode(const Writer& w, hid_t parent, std::size_t index, const Episod
   w.Attribute(g.get(), "weather", pipeline::WeatherOf(e));
   w.Attribute(g.get(), "window_s", e.window_s);
   w.Attribute(g.get(), "raw_modalities", e.raw_modalities);
+  static const char* const kParts[] = {"train", "validation", "test"};
+  if (part >= 0) w.Attribute(g.get(), "part", std::string(kParts[part]));
   w.Vectors(g.get(), "window_truth_m", e.window_truth);
 
   // The frames table, and each modality's rows of it.
@@ -374,6 +376,12 @@ void WriteDatasetFile(const std::string& path, const DatasetHeader& header,
     w.fail().Invalid("latents for " + std::to_string(latents.size()) + " episodes, not " +
                      std::to_string(episodes.size()));
   if (!latents.empty() && header.latent_dim <= 0) w.fail().Invalid("latents without a latent size");
+  if (!header.parts.empty() && header.parts.size() != episodes.size())
+    w.fail().Invalid("parts for " + std::to_string(header.parts.size()) + " episodes, not " +
+                     std::to_string(episodes.size()));
+  for (int part : header.parts)
+    if (part < 0 || part > 2)
+      w.fail().Invalid("part " + std::to_string(part) + " is not 0, 1 or 2");
   // Errors become exceptions here, not messages of HDF5's own on stderr.
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
   // The root group's creation properties are the file's.
@@ -419,7 +427,8 @@ void WriteDatasetFile(const std::string& path, const DatasetHeader& header,
     const Id all = w.Group(r, "episodes");
     for (std::size_t i = 0; i < episodes.size(); ++i) {
       WriteEpisode(w, all.get(), i, episodes[i], nodes.size(),
-                   latents.empty() ? nullptr : &latents[i], header.latent_dim);
+                   latents.empty() ? nullptr : &latents[i], header.latent_dim,
+                   header.parts.empty() ? -1 : header.parts[i]);
       if (episode_written) episode_written(i + 1);
     }
   }

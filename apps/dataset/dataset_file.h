@@ -36,6 +36,10 @@ struct DatasetHeader {
   double window_s = 0.2;        // the alignment window t^w
   std::int64_t latent_dim = 0;  // 0: no latents
   std::string model;            // the model's manifest path, "" without
+  // Per episode, the part `uavsim train --seed seed` puts it in by
+  // trajectory: 0 training, 1 validation, 2 test (empty: no `part`
+  // attribute is written).
+  std::vector<int> parts;
 };
 
 // One row of /nodes.

@@ -333,15 +333,35 @@ SavedEpisodes ReadSavedEpisodes(const Scenario& base, const EpisodePlan& plan, i
   return saved;
 }
 
-pipeline::Dataset SplitByTrajectory(std::vector<pipeline::Episode> episodes, std::uint64_t seed) {
-  const std::size_t n = episodes.size();
+namespace {
+
+// SplitByTrajectory's seeded shuffle of n episodes and the number held out
+// in each of the test and validation parts: order[j] goes to the test part
+// for j < held, to validation for j < 2 held, else to training.
+std::vector<std::size_t> TrajectoryOrder(std::size_t n, std::uint64_t seed, std::size_t* held) {
   std::vector<std::size_t> order(n);
   for (std::size_t i = 0; i < n; ++i) order[i] = i;
   core::RngStream rng(seed, "train/split");
   for (std::size_t i = n; i > 1; --i) std::swap(order[i - 1], order[rng.UniformInt(i)]);
-  const std::size_t held = n >= 3 ? std::max<std::size_t>(1, std::lround(0.15 * n)) : 0;
+  *held = n >= 3 ? std::max<std::size_t>(1, std::lround(0.15 * n)) : 0;
+  return order;
+}
+
+}  // namespace
+
+std::vector<int> TrajectoryParts(std::size_t n, std::uint64_t seed) {
+  std::size_t held = 0;
+  const std::vector<std::size_t> order = TrajectoryOrder(n, seed, &held);
+  std::vector<int> part(n, 0);
+  for (std::size_t j = 0; j < n; ++j) part[order[j]] = j < held ? 2 : j < 2 * held ? 1 : 0;
+  return part;
+}
+
+pipeline::Dataset SplitByTrajectory(std::vector<pipeline::Episode> episodes, std::uint64_t seed) {
+  std::size_t held = 0;
+  const std::vector<std::size_t> order = TrajectoryOrder(episodes.size(), seed, &held);
   pipeline::Dataset d;
-  for (std::size_t j = 0; j < n; ++j) {
+  for (std::size_t j = 0; j < order.size(); ++j) {
     pipeline::Episode& e = episodes[order[j]];
     (j < held ? d.test : j < 2 * held ? d.validation : d.train).push_back(std::move(e));
   }

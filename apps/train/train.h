@@ -128,6 +128,10 @@ std::optional<std::vector<pipeline::Episode>> GatherEpisodes(
 // there are three or more episodes), the rest training; which episode goes
 // where is a seeded shuffle.
 pipeline::Dataset SplitByTrajectory(std::vector<pipeline::Episode> episodes, std::uint64_t seed);
+// The part SplitByTrajectory(episodes, seed) puts each of n episodes in:
+// 0 training, 1 validation, 2 test (what `uavsim dataset` records, so a
+// script can choose on the validation flights `uavsim train --seed` uses).
+std::vector<int> TrajectoryParts(std::size_t n, std::uint64_t seed);
 // Splits by frame (pipeline::DataSplit::kFrame): each episode goes into every
 // part, each of its windows drawn into one part (test with probability 0.15,
 // validation 0.15, else training; a seeded draw per window) and scored

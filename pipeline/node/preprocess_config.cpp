@@ -49,6 +49,20 @@ void Visit(V& v, LidarPreprocessConfig& c) {
   v("drone_count_margin", c.drone_count_margin, Rule::Positive(1e6));
 }
 
+std::vector<std::string> NodeExtensions(const PreprocessConfig& p) {
+  std::vector<std::string> ext;
+  if (p.lidar.weather_echo_rejection) ext.push_back("lidar.weather_echo_rejection=true");
+  if (p.lidar.drone_gate) ext.push_back("lidar.drone_gate=true");
+  if (p.radar.rain_doppler_rejection) ext.push_back("radar.rain_doppler_rejection=true");
+  if (p.radar.min_peak_snr_db > 0.0)
+    ext.push_back("radar.min_peak_snr_db=" + core::FormatNumber(p.radar.min_peak_snr_db));
+  if (p.radar.selection != RadarSelection::kLargest)
+    ext.push_back(std::string("radar.selection=") + RadarSelectionName(p.radar.selection));
+  if (p.max_observations > 1)
+    ext.push_back("max_observations=" + std::to_string(p.max_observations));
+  return ext;
+}
+
 const char* LidarBackgroundName(LidarBackground b) {
   return b == LidarBackground::kWarmup ? "warmup" : "survey";
 }
@@ -72,6 +86,7 @@ void Visit(V& v, RadarPreprocessConfig& c) {
   v("min_support", c.min_support, Rule::Range(0, 1000));
   v("gate_m", c.gate_m, Rule::Positive(1000.0));
   v("max_speed_mps", c.max_speed_mps, Rule::NonNegative(1000.0));
+  v("min_peak_snr_db", c.min_peak_snr_db, Rule::NonNegative(200.0));
 }
 
 template <class V>

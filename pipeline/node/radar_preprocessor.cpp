@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <vector>
 
@@ -24,6 +25,20 @@ std::vector<Eigen::Vector3d> Centroids(const sensors::RadarFrame& frame,
   for (std::size_t id = 0; id < sum.size(); ++id)
     sum[id] /= static_cast<double>(std::max<std::size_t>(1, clusters.size[id]));
   return sum;
+}
+
+// The strongest detection's SNR (dB) of every cluster of the valid detections.
+std::vector<double> PeakSnrs(const sensors::RadarFrame& frame,
+                             const std::vector<std::size_t>& valid,
+                             const DbscanClusters& clusters) {
+  std::vector<double> peak(clusters.size.size(), -std::numeric_limits<double>::infinity());
+  for (std::size_t k = 0; k < valid.size(); ++k) {
+    const int id = clusters.label[k];
+    if (id == DbscanClusters::kNoise) continue;
+    double& p = peak[static_cast<std::size_t>(id)];
+    p = std::max(p, static_cast<double>(frame.points[valid[k]].snr_db));
+  }
+  return peak;
 }
 
 }  // namespace
@@ -122,7 +137,16 @@ PointObservation RadarPreprocessor::Process(const sensors::RadarFrame& frame,
   const DbscanClusters clusters =
       Dbscan(features, dims, config_.cluster_eps_m, config_.cluster_min_points);
   const int extra = further ? max_observations_ - 1 : 0;
-  const std::vector<int> chosen = Choose(frame, valid, clusters, config_.clusters_kept + extra);
+  std::vector<int> chosen = Choose(frame, valid, clusters, config_.clusters_kept + extra);
+  // The candidates' score (the selection's memory is left as it was).
+  if (config_.min_peak_snr_db > 0.0) {
+    const std::vector<double> peak = PeakSnrs(frame, valid, clusters);
+    chosen.erase(
+        std::remove_if(
+            chosen.begin(), chosen.end(),
+            [&](int id) { return peak[static_cast<std::size_t>(id)] < config_.min_peak_snr_db; }),
+        chosen.end());
+  }
   const ChosenPoints points =
       PointsOfClusters(clusters, chosen, static_cast<std::size_t>(config_.clusters_kept), valid);
   for (const auto& group : points.further) further->push_back(ObservationOf(frame, group));

@@ -19,6 +19,12 @@
 //   further    (max_observations N > 1, issue 46) the next N - 1 clusters
 //              in the selection's order that pass its gate (persistent:
 //              min_support), each an observation of its own.
+//   score      (radar.min_peak_snr_db > 0, ours, issue 72) after the
+//              selection, a chosen cluster whose strongest detection's SNR
+//              is below min_peak_snr_db is dropped, the others keep their
+//              order (with one observation a frame: the one candidate or
+//              nothing, the "nothing seen" header). The selection's memory
+//              (persistent) still holds every cluster.
 //   rain       (radar.rain_doppler_rejection, ours; before clustering, in
 //              rain only) a detection at direction u from the radar (unit,
 //              world) whose radial velocity v lies in [-9.65 u_z - m,

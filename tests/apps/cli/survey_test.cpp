@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "core/json_io.h"
 #include "test_support.h"
 
 namespace fs = std::filesystem;
@@ -88,4 +89,27 @@ TEST_CASE("Survey: cached on disk, a cached, damaged or uncached survey gives th
   Run(dir + "/warmup", cache, {"--set", "/pipeline/preprocess/lidar/background=warmup"});
   CheckSameRun(dir + "/default", dir + "/warmup");
   CHECK(ReadFile(dir + "/default/packets.csv") != ReadFile(dir + "/first/packets.csv"));
+}
+
+TEST_CASE("Radar score: off at 0 (the default's outputs), listed among the run's node extensions",
+          "[sim][slow]") {
+  const std::string dir = TempDir("radar_score");
+  const std::string cache = dir + "/cache";
+  Run(dir + "/default", cache);
+  Run(dir + "/zero", cache, {"--set", "/pipeline/preprocess/radar/min_peak_snr_db=0"});
+  CheckSameRun(dir + "/default", dir + "/zero");
+  Run(dir + "/score", cache, {"--set", "/pipeline/preprocess/radar/min_peak_snr_db=6.4"});
+  const auto extensions = [&](const std::string& run) {
+    return uavsim::core::Json::parse(ReadFile(run + "/manifest.json"))["node_extensions"]
+        .get<std::vector<std::string>>();
+  };
+  // The default city's nodes: ours where scenarios/default.json switches them on.
+  CHECK(extensions(dir + "/default") ==
+        std::vector<std::string>{"lidar.weather_echo_rejection=true",
+                                 "radar.rain_doppler_rejection=true",
+                                 "radar.selection=persistent"});
+  CHECK(extensions(dir + "/score") == std::vector<std::string>{"lidar.weather_echo_rejection=true",
+                                                               "radar.rain_doppler_rejection=true",
+                                                               "radar.min_peak_snr_db=6.4",
+                                                               "radar.selection=persistent"});
 }

@@ -142,6 +142,7 @@ void CheckEpisode(const H5::H5File& f, std::size_t index, const Episode& e) {
   CHECK(StringAttribute(group, "label") == e.label);
   CHECK(StringAttribute(group, "weather") == uavsim::pipeline::WeatherOf(e));
   CHECK(NumberAttribute<double>(group, "window_s", F64) == e.window_s);
+  CHECK(StringAttribute(group, "part") == "train");  // two flights: none held out
 
   const auto window_truth = Read<double>(f, g + "window_truth_m", F64);
   REQUIRE(window_truth.rows() == e.window_truth.size());

@@ -53,6 +53,24 @@ TEST_CASE("Split by trajectory: each flight in one part only, 70/15/15", "[sim][
   }
 }
 
+TEST_CASE("TrajectoryParts names the part SplitByTrajectory puts each flight in", "[sim][train]") {
+  for (const std::uint64_t seed : {1u, 7u, 1234u}) {
+    const std::vector<Episode> all = Episodes(23, 10);
+    const std::vector<int> part = uavsim::sim::TrajectoryParts(all.size(), seed);
+    const auto d = uavsim::sim::SplitByTrajectory(all, seed);
+    std::map<std::string, int> expected;
+    for (const Episode& e : d.train) expected[e.label] = 0;
+    for (const Episode& e : d.validation) expected[e.label] = 1;
+    for (const Episode& e : d.test) expected[e.label] = 2;
+    REQUIRE(part.size() == all.size());
+    for (std::size_t i = 0; i < all.size(); ++i) {
+      INFO("seed " << seed << ", episode " << i);
+      CHECK(part[i] == expected.at(all[i].label));
+    }
+  }
+  CHECK(uavsim::sim::TrajectoryParts(2, 1) == std::vector<int>{0, 0});  // too few to hold out
+}
+
 TEST_CASE("Split by frame: every window in exactly one part, about 70/15/15, seeded",
           "[sim][train]") {
   const int n = 6, windows = 200;

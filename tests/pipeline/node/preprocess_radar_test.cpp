@@ -170,6 +170,79 @@ TEST_CASE("RadarPreprocessor: persistent keeps the cluster seen frame after fram
   CHECK(persistent_on_target == 11);
 }
 
+// The detections of `points` with every SNR set to `snr_db`, one raised to `peak_db`.
+std::vector<sensors::RadarPoint> WithSnr(std::vector<sensors::RadarPoint> points, double snr_db,
+                                         double peak_db) {
+  for (sensors::RadarPoint& p : points) p.snr_db = static_cast<float>(snr_db);
+  points[points.size() / 2].snr_db = static_cast<float>(peak_db);
+  return points;
+}
+
+TEST_CASE(
+    "RadarPreprocessor: min_peak_snr_db sends a candidate whose strongest detection "
+    "reaches it, else nothing",
+    "[pipeline]") {
+  core::RngStream rng(3, "preprocess_radar_test/min_peak_snr");
+  const Eigen::Vector3d uav(20.0, 10.0, 30.0), clutter(-5.0, 30.0, 35.0);
+  // Rain clutter: many detections just over the CFAR; the drone: few, one strong.
+  const auto clutter_points = WithSnr(Cluster(clutter, 20, 3.0, rng), 4.8, 5.5);
+  const auto uav_points = WithSnr(Cluster(uav, 6, -4.0, rng), 6.0, 9.0);
+  const sensors::RadarFrame frame = Frame({clutter_points, uav_points});
+  PreprocessConfig config = Largest();
+  config.radar.min_peak_snr_db = 5.5;  // the clutter's peak exactly: kept
+  CHECK(RadarPreprocessor(Sensor(), config).Process(frame).count() == 20);
+  config.radar.min_peak_snr_db = 5.6;  // the largest scores too low: nothing, not the next
+  CHECK(RadarPreprocessor(Sensor(), config).Process(frame).count() == 0);
+  config.radar.min_peak_snr_db = 0.0;  // off: the paper's largest
+  CHECK(RadarPreprocessor(Sensor(), config).Process(frame).count() == 20);
+  // With further observations the ones that score enough are sent, in order.
+  config.max_observations = 2;
+  config.radar.min_peak_snr_db = 8.0;
+  std::vector<PointObservation> further;
+  const PointObservation obs = RadarPreprocessor(Sensor(), config).Process(frame, &further);
+  REQUIRE(obs.count() == 6);
+  CHECK(Near(&obs.values[0], uav, 2.0));
+  CHECK(further.empty());
+}
+
+TEST_CASE("RadarPreprocessor: min_peak_snr_db leaves the persistent selection's memory alone",
+          "[pipeline]") {
+  // Frame by frame, the gated node sends what the ungated one sends or
+  // nothing, and nothing exactly when that candidate's peak is below the floor.
+  core::RngStream rng(3, "preprocess_radar_test/min_peak_snr_memory");
+  PreprocessConfig config;
+  config.radar.selection = RadarSelection::kPersistent;
+  RadarPreprocessor open(Sensor(), config);
+  config.radar.min_peak_snr_db = 8.0;
+  RadarPreprocessor gated(Sensor(), config);
+  int dropped = 0, sent = 0;
+  for (int k = 0; k < 40; ++k) {
+    const Eigen::Vector3d uav(20.0 + 0.5 * k, 10.0, 30.0);
+    const Eigen::Vector3d clutter(rng.Uniform(-40, 40), rng.Uniform(20, 60), rng.Uniform(5, 40));
+    const double uav_peak = rng.Uniform(5.0, 11.0);  // the drone fades in and out
+    sensors::RadarFrame frame = Frame({WithSnr(Cluster(clutter, 6, 3.0, rng), 5.0, 6.0),
+                                       WithSnr(Cluster(uav, 4, -2.0, rng), 5.0, uav_peak)});
+    frame.t_capture_s = k / 15.0;
+    const PointObservation a = open.Process(frame), b = gated.Process(frame);
+    if (a.count() == 0) {
+      CHECK(b.count() == 0);
+      continue;
+    }
+    double peak = 0.0;
+    for (std::size_t i = 0; i < a.count(); ++i) peak = std::max(peak, double(a.values[5 * i + 4]));
+    INFO("frame " << k << ", peak " << peak);
+    if (peak >= 8.0) {
+      CHECK(b.values == a.values);
+      ++sent;
+    } else {
+      CHECK(b.count() == 0);
+      ++dropped;
+    }
+  }
+  CHECK(sent > 5);  // both branches were exercised
+  CHECK(dropped > 5);
+}
+
 TEST_CASE("RadarPreprocessor: persistent's gate grows with the time apart", "[pipeline]") {
   core::RngStream rng(3, "preprocess_radar_test/gate");
   PreprocessConfig config;
