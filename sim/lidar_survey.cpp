@@ -57,6 +57,7 @@ std::string KeyOf(const NodeConfig& node, const Scenario& s, const core::WorldGe
                     {"node", node.id},
                     {"sensor", core::ToJson(node.sensor.lidar)},
                     {"preprocess", core::ToJson(s.pipeline.preprocess.lidar)},
+                    {"known_weather", core::ToJson(s.pipeline.preprocess.weather.Known(s.weather))},
                     {"world", std::to_string(GeometryHash(world))},
                     {"weather", core::ToJson(s.weather)}};
   return key.dump();

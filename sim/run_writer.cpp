@@ -135,6 +135,7 @@ core::Json Manifest(const FinishedRun& run) {
   manifest["started_utc"] = run.started_utc;
   manifest["wall_s"] = run.summary.wall_s;
   manifest["node_extensions"] = pipeline::NodeExtensions(run.scenario.pipeline.preprocess);
+  manifest["oracles"] = pipeline::NodeOracles(run.scenario.pipeline.preprocess);
   manifest["scenario"] = ResolvedJson(run.scenario);
   return manifest;
 }

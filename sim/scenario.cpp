@@ -538,7 +538,10 @@ const std::vector<std::pair<const char*, core::Json>>& LaterPreprocessKeys() {
         {"/radar/gate_m", d.radar.gate_m},
         {"/radar/max_speed_mps", d.radar.max_speed_mps},
         {"/radar/min_peak_snr_db", d.radar.min_peak_snr_db},
-        {"/max_observations", d.max_observations}};
+        {"/max_observations", d.max_observations},
+        {"/weather/source", pipeline::NodeWeatherSourceName(d.weather.source)},
+        {"/weather/assumed_rain_mm_h", d.weather.assumed_rain_mm_h},
+        {"/weather/assumed_fog_visibility_m", nullptr}};
   }();
   return keys;
 }
@@ -553,6 +556,7 @@ std::string LayoutHash(const Scenario& s) {
     if (preprocess.contains(p) && preprocess.at(p) == value)
       preprocess.at(p.parent_pointer()).erase(p.back());
   }
+  if (preprocess.contains("weather") && preprocess["weather"].empty()) preprocess.erase("weather");
   // Sensor keys added later, likewise: left out at their defaults.
   core::Json nodes = j.at("nodes");
   const double aperture_mm = sensors::LidarConfig{}.receiver_aperture_mm;

@@ -147,7 +147,8 @@ class LidarNodeSensor final : public NodeSensor {
   LidarNodeSensor(const NodeConfig& node, const Scenario& s, SensorContext c)
       : c_(std::move(c)),
         lidar_(node.sensor.lidar, *c_.scene),
-        preprocess_(node.sensor.lidar, s.pipeline.preprocess, c_.weather) {
+        preprocess_(node.sensor.lidar, s.pipeline.preprocess,
+                    s.pipeline.preprocess.weather.Known(c_.weather)) {
     if (s.pipeline.preprocess.lidar.background == pipeline::LidarBackground::kSurvey &&
         !s.pipeline.preprocess.LidarRaw())
       preprocess_.SetStaticMap(
@@ -190,7 +191,8 @@ class RadarNodeSensor final : public NodeSensor {
       : c_(std::move(c)),
         radar_(node.sensor.radar, *c_.scene),
         processor_(node.sensor.radar),
-        preprocess_(node.sensor.radar, s.pipeline.preprocess, c_.weather) {
+        preprocess_(node.sensor.radar, s.pipeline.preprocess,
+                    s.pipeline.preprocess.weather.Known(c_.weather)) {
     radar_.set_static_cache(s.execution.static_cache);
   }
 

@@ -89,6 +89,33 @@ void Visit(V& v, RadarPreprocessConfig& c) {
   v("min_peak_snr_db", c.min_peak_snr_db, Rule::NonNegative(200.0));
 }
 
+const char* NodeWeatherSourceName(NodeWeatherSource s) {
+  return s == NodeWeatherSource::kTruth ? "truth" : "assumed";
+}
+
+core::WeatherConfig NodeWeatherConfig::Known(const core::WeatherConfig& truth) const {
+  if (source == NodeWeatherSource::kTruth) return truth;
+  core::WeatherConfig w = truth;  // illumination: no node uses it
+  w.rain_mm_h = assumed_rain_mm_h;
+  w.fog_visibility_m = assumed_fog_visibility_m;
+  return w;
+}
+
+std::vector<std::string> NodeOracles(const PreprocessConfig& p) {
+  const bool uses_weather = (p.lidar.weather_echo_rejection && !p.LidarRaw()) ||
+                            (p.radar.rain_doppler_rejection && !p.RadarRaw());
+  if (uses_weather && p.weather.source == NodeWeatherSource::kTruth) return {"weather=truth"};
+  return {};
+}
+
+template <class V>
+void Visit(V& v, NodeWeatherConfig& c) {
+  v.Enum("source", c.source,
+         {{"truth", NodeWeatherSource::kTruth}, {"assumed", NodeWeatherSource::kAssumed}});
+  v("assumed_rain_mm_h", c.assumed_rain_mm_h, Rule::NonNegative(300.0));
+  v("assumed_fog_visibility_m", c.assumed_fog_visibility_m, Rule{1.0, 1e5, false, false});
+}
+
 template <class V>
 void Visit(V& v, PreprocessConfig& c) {
   v("raw", c.raw);
@@ -96,11 +123,13 @@ void Visit(V& v, PreprocessConfig& c) {
   v.Object("camera", c.camera);
   v.Object("lidar", c.lidar);
   v.Object("radar", c.radar);
+  v.Object("weather", c.weather);
 }
 
 UAVSIM_INSTANTIATE_VISIT(CameraPreprocessConfig);
 UAVSIM_INSTANTIATE_VISIT(LidarPreprocessConfig);
 UAVSIM_INSTANTIATE_VISIT(RadarPreprocessConfig);
+UAVSIM_INSTANTIATE_VISIT(NodeWeatherConfig);
 UAVSIM_INSTANTIATE_VISIT(PreprocessConfig);
 
 }  // namespace uavsim::pipeline

@@ -12,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include "core/weather.h"
+
 namespace uavsim::pipeline {
 
 struct CameraPreprocessConfig {
@@ -155,6 +157,24 @@ struct RadarPreprocessConfig {
   double min_peak_snr_db = 0.0;
 };
 
+// What the nodes know of the weather (issue 72 item 3, issue 68 item 4):
+// the LiDAR's weather-echo rejection (and its survey's) and the radar's
+// rain Doppler use it; the sensors themselves always see the true weather.
+enum class NodeWeatherSource {
+  kTruth,    // the scenario's /weather, as from a perfect visibility meter and
+             // rain gauge: an oracle, listed in a run's manifest (`oracles`)
+  kAssumed,  // assumed_rain_mm_h and assumed_fog_visibility_m, whatever falls
+};
+const char* NodeWeatherSourceName(NodeWeatherSource s);  // "truth", "assumed"
+
+struct NodeWeatherConfig {
+  NodeWeatherSource source = NodeWeatherSource::kTruth;
+  double assumed_rain_mm_h = 0.0;                  // with "assumed"; 0 = dry
+  std::optional<double> assumed_fog_visibility_m;  // with "assumed"; unset = no fog
+  // The weather the nodes take as the weather, given the true one.
+  core::WeatherConfig Known(const core::WeatherConfig& truth) const;
+};
+
 struct PreprocessConfig {
   bool raw = false;  // every modality raw: the paper's "without preprocessing"
   // Observations a node sends per frame (issue 46: several targets). 1 (the
@@ -169,6 +189,7 @@ struct PreprocessConfig {
   CameraPreprocessConfig camera;
   LidarPreprocessConfig lidar;
   RadarPreprocessConfig radar;
+  NodeWeatherConfig weather;
 
   bool CameraRaw() const { return raw || camera.raw; }
   bool LidarRaw() const { return raw || lidar.raw; }
@@ -179,6 +200,10 @@ struct PreprocessConfig {
 // switches of ours that are on, as "key=value" (a run's manifest lists
 // them; with a model, its `extensions` too).
 std::vector<std::string> NodeExtensions(const PreprocessConfig& p);
+// The truths the nodes are handed, as "key=value" (a run's manifest lists
+// them): "weather=truth" when a weather consumer is on and the nodes are
+// given the true weather.
+std::vector<std::string> NodeOracles(const PreprocessConfig& p);
 
 template <class V>
 void Visit(V& v, CameraPreprocessConfig& c);
@@ -186,6 +211,8 @@ template <class V>
 void Visit(V& v, LidarPreprocessConfig& c);
 template <class V>
 void Visit(V& v, RadarPreprocessConfig& c);
+template <class V>
+void Visit(V& v, NodeWeatherConfig& c);
 template <class V>
 void Visit(V& v, PreprocessConfig& c);
 

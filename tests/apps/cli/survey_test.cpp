@@ -113,3 +113,29 @@ TEST_CASE("Radar score: off at 0 (the default's outputs), listed among the run's
                                                                "radar.min_peak_snr_db=6.4",
                                                                "radar.selection=persistent"});
 }
+
+TEST_CASE(
+    "Node weather: the truth is listed among a run's oracles; an assumed weather equal to "
+    "the truth gives the same run",
+    "[sim][slow]") {
+  const std::string dir = TempDir("node_weather");
+  const std::string cache = dir + "/cache";
+  Run(dir + "/truth", cache);
+  Run(dir + "/assumed", cache, {"--set", "/pipeline/preprocess/weather/source=assumed"});
+  const auto manifest = [&](const std::string& run) {
+    return uavsim::core::Json::parse(ReadFile(run + "/manifest.json"));
+  };
+  CHECK(manifest(dir + "/truth")["oracles"] == uavsim::core::Json::array({"weather=truth"}));
+  CHECK(manifest(dir + "/assumed")["oracles"] == uavsim::core::Json::array());
+  // The default city is clear, and the assumed weather's default is clear.
+  for (const char* f : {"packets.csv", "estimates.csv", "metrics.json"}) {
+    INFO(f);
+    if (std::string(f) == "metrics.json")
+      CHECK(uavsim::testing::WithoutWallClock(
+                uavsim::core::Json::parse(ReadFile(dir + "/truth/" + f))) ==
+            uavsim::testing::WithoutWallClock(
+                uavsim::core::Json::parse(ReadFile(dir + "/assumed/" + f))));
+    else
+      CHECK(ReadFile(dir + "/truth/" + f) == ReadFile(dir + "/assumed/" + f));
+  }
+}

@@ -55,3 +55,43 @@ TEST_CASE("PreprocessConfig: bad values name the pointer and the rule", "[pipeli
 
 }  // namespace
 }  // namespace uavsim::pipeline
+
+namespace uavsim::pipeline {
+namespace {
+
+TEST_CASE("NodeWeatherConfig: the truth, or the assumed weather whatever falls; oracles listed",
+          "[pipeline]") {
+  core::WeatherConfig truth;
+  truth.rain_mm_h = 10.0;
+  truth.fog_visibility_m = 300.0;
+  truth.illumination = 0.5;
+  NodeWeatherConfig c;
+  CHECK(core::ToJson(c.Known(truth)) == core::ToJson(truth));
+  c.source = NodeWeatherSource::kAssumed;
+  core::WeatherConfig known = c.Known(truth);
+  CHECK(known.rain_mm_h == 0.0);
+  CHECK_FALSE(known.fog_visibility_m.has_value());
+  c.assumed_rain_mm_h = 2.0;
+  c.assumed_fog_visibility_m = 1000.0;
+  known = c.Known(truth);
+  CHECK(known.rain_mm_h == 2.0);
+  CHECK(known.fog_visibility_m == 1000.0);
+
+  PreprocessConfig p;  // no weather consumer on: nothing is handed the truth
+  CHECK(NodeOracles(p).empty());
+  p.lidar.weather_echo_rejection = true;
+  CHECK(NodeOracles(p) == std::vector<std::string>{"weather=truth"});
+  p.lidar.raw = true;
+  CHECK(NodeOracles(p).empty());
+  p.radar.rain_doppler_rejection = true;
+  CHECK(NodeOracles(p) == std::vector<std::string>{"weather=truth"});
+  p.weather.source = NodeWeatherSource::kAssumed;
+  CHECK(NodeOracles(p).empty());
+  CHECK_THAT(ErrorOf(R"({"weather": {"source": "meter"}})"),
+             Catch::Contains("/pipeline/preprocess/weather/source"));
+  CHECK_THAT(ErrorOf(R"({"weather": {"assumed_fog_visibility_m": 0}})"),
+             Catch::Contains("/pipeline/preprocess/weather/assumed_fog_visibility_m"));
+}
+
+}  // namespace
+}  // namespace uavsim::pipeline
